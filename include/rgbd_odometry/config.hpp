@@ -1,0 +1,89 @@
+#pragma once
+// The one typed configuration, grouped by pipeline stage. Loaded and validated once at
+// start-up (YAML through OpenCV's FileStorage, then command-line overrides); the hot path
+// only ever reads these fields.
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rgbdo {
+
+struct CameraConfig {
+  int width = 640;
+  int height = 480;
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  // OpenCV order: k1, k2, p1, p2, k3.
+  std::array<double, 5> distortion{0, 0, 0, 0, 0};
+};
+
+struct DepthConfig {
+  double units_per_m = 5000.0;  // raw uint16 value per metre (TUM: 5000, OpenNI mm: 1000)
+  double min_m = 0.4;           // PrimeSense sensors give no reliable depth below ~0.4 m
+  double max_m = 4.5;           // beyond ~4.5 m sigma_Z exceeds 3 cm: useless for odometry
+  // A keypoint whose 5x5 depth neighbourhood spans more than this fraction of its depth sits
+  // on an occlusion edge, where colour and depth disagree; it is not back-projected.
+  double edge_max_relative_step = 0.03;
+  // Correct each keypoint's depth from the depth frame's capture time to the colour frame's
+  // (the streams of PrimeSense sensors are not synchronised; TUM fr1 is up to 17 ms apart).
+  bool compensate_timing = true;
+};
+
+struct FeatureConfig {
+  std::string detector = "ORB";
+  std::string descriptor = "ORB";
+  int max_features = 1000;
+  int border_px = 16;  // the image periphery dropped before detection (distortion is worst there)
+};
+
+struct MatchConfig {
+  double ratio = 0.8;  // lambda_ratio: best / second-best distance must be below this
+};
+
+struct RansacConfig {
+  double inlier_threshold_m = 0.05;  // lambda_inlier
+  int max_iterations = 200;
+  bool refine_threshold = true;  // threshold <- min(3 sigma_inliers, lambda_inlier)
+  int min_inliers = 12;          // fewer than this and the pair is reported as failed
+};
+
+struct CovarianceConfig {
+  int perturbations = 100;
+  double depth_noise_coeff = 1.425e-3;  // sigma_Z = coeff * Z^2 (Willis & Brink eq. 2), 1/m
+  // Multiplies the sample covariance before it is reported; see README "Covariance scale".
+  double scale = 1.0;
+};
+
+struct Config {
+  CameraConfig camera;
+  DepthConfig depth;
+  FeatureConfig features;
+  MatchConfig matching;
+  RansacConfig ransac;
+  CovarianceConfig covariance;
+  std::uint64_t seed = 1;  // with the frame-pair index, seeds RANSAC and the perturbations
+};
+
+// A bad configuration value or file; the message names the key or file.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Reads a YAML file (OpenCV FileStorage syntax). Keys absent from the file keep their
+// defaults; an unknown key is an error (a typo must not silently fly with a default).
+// `camera.calibration_file` may name an OpenCV calibration file whose `camera_matrix` and
+// `distortion_coefficients` provide the intrinsics.
+Config load_config(const std::string& path);
+
+// Applies "section.key=value" overrides (the command line's), in order.
+void apply_overrides(Config& config, const std::vector<std::string>& assignments);
+
+// Every key a configuration file or override may set, for help texts and docs.
+std::vector<std::string> config_keys();
+
+// Throws ConfigError naming the first invalid key.
+void validate(const Config& config);
+
+}  // namespace rgbdo

@@ -1,0 +1,47 @@
+#pragma once
+// Stage 4: robust rigid motion from 3-D correspondences (Willis & Brink Sec. III-A, stage 2).
+// Hypotheses from random 3-point samples are scored by their inlier count at lambda_inlier;
+// the best is then refined as PCL's refineModel does: fit all inliers by least squares,
+// shrink the threshold to min(3 sigma_inliers, lambda_inlier), re-select, until stable.
+// The final fit weights each pair by the sensor noise model (far points count less).
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "rgbd_odometry/config.hpp"
+#include "rgbd_odometry/status.hpp"
+
+namespace rgbdo {
+
+struct RansacResult {
+  Status status = Status::RansacFailed;
+  Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // maps curr points into prev
+  std::vector<int> inliers;  // indices into the point pairs
+  double threshold_m = 0;    // the final (refined) inlier threshold
+  int hypotheses = 0;        // non-degenerate samples scored
+};
+
+class RigidRansac {
+ public:
+  RigidRansac(const RansacConfig& ransac, double depth_noise_coeff);
+
+  // prev[k] ~ T * curr[k] for inliers k.
+  [[nodiscard]] RansacResult estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                      std::mt19937_64& rng);
+
+  // The refinement alone, from a given motion (used again after the points were corrected).
+  [[nodiscard]] RansacResult refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                    const Eigen::Isometry3d& initial);
+
+ private:
+  bool sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                            const int* idx) const;
+  RansacConfig config_;
+  double depth_noise_coeff_;
+  std::vector<int> scratch_inliers_;
+  std::vector<Eigen::Vector3d> fit_prev_, fit_curr_;
+  std::vector<double> fit_weights_;
+};
+
+}  // namespace rgbdo

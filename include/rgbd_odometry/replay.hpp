@@ -1,0 +1,25 @@
+#pragma once
+// The executable's job, as a library call: read frames from a source, run the pipeline,
+// write every output, report. main() only parses the command line into RunOptions.
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace rgbdo {
+
+struct RunOptions {
+  std::string source;       // "tum:DIR"
+  std::string config_path;  // empty: built-in defaults
+  std::vector<std::string> overrides;  // "section.key=value", applied after the file
+  std::string log_path;         // odometry CSV, empty: none
+  std::string trajectory_path;  // TUM trajectory, empty: none
+  bool quiet = false;           // no per-pair lines
+  bool verbose = false;         // per-pair stage times and counts
+  bool start_at_groundtruth = false;  // trajectory origin: ground-truth pose of the first frame
+  int max_frames = 0;           // 0: all
+};
+
+// Returns the process exit code: 0 ok, 1 input/output failure, 2 bad configuration.
+int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+}  // namespace rgbdo

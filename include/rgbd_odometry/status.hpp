@@ -1,0 +1,34 @@
+#pragma once
+// Why a frame or a frame pair produced no odometry. Every pair yields a row; a failed one
+// carries one of these, so a user can tell "blank wall" from "sensor gave no depth".
+#include <string_view>
+
+namespace rgbdo {
+
+enum class Status {
+  Ok,
+  BadFrame,           // the colour or depth image could not be read or has the wrong size
+  NoDepth,            // no depth image was associated with the colour frame
+  TooFewFeatures,     // detector found fewer keypoints than a pose needs (no texture)
+  TooFewMatches,      // the symmetric ratio test kept fewer matches than a pose needs
+  DegenerateSample,   // every RANSAC sample was collinear or violated rigidity
+  RansacFailed,       // the best hypothesis has too few inliers
+  CovarianceFailed,   // the perturbation covariance was not finite and positive definite
+};
+
+// The lower-case word written in the odometry log's `status` column.
+constexpr std::string_view status_word(Status s) {
+  switch (s) {
+    case Status::Ok: return "ok";
+    case Status::BadFrame: return "bad_frame";
+    case Status::NoDepth: return "no_depth";
+    case Status::TooFewFeatures: return "too_few_features";
+    case Status::TooFewMatches: return "too_few_matches";
+    case Status::DegenerateSample: return "degenerate_sample";
+    case Status::RansacFailed: return "ransac_failed";
+    case Status::CovarianceFailed: return "covariance_failed";
+  }
+  return "unknown";
+}
+
+}  // namespace rgbdo

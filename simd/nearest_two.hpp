@@ -1,0 +1,22 @@
+#pragma once
+// Kernel interface for the symmetric ratio test: one pass over the query x train distance
+// matrix yields, for every row of each set, its best and second-best distance into the
+// other set and the index of the best. Each instruction set implements the same signature;
+// simd/scalar/hamming_scalar.cpp is the reference every other one is tested against.
+#include <cstddef>
+#include <cstdint>
+
+namespace rgbdo::simd {
+
+struct NearestTwo {
+  int best_index = -1;  // -1: the other set is empty
+  std::uint32_t best = UINT32_MAX;
+  std::uint32_t second = UINT32_MAX;  // UINT32_MAX: fewer than two candidates
+};
+
+// Binary descriptors of `bytes` bytes, rows `stride` bytes apart. Ties keep the lowest index.
+void nearest_two_hamming_scalar(const std::uint8_t* query, int n_query, std::size_t query_stride,
+                                const std::uint8_t* train, int n_train, std::size_t train_stride,
+                                int bytes, NearestTwo* query_out, NearestTwo* train_out);
+
+}  // namespace rgbdo::simd

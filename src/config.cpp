@@ -1,0 +1,282 @@
+#include "rgbd_odometry/config.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/features2d.hpp>
+#include <set>
+#include <sstream>
+#include <variant>
+
+namespace rgbdo {
+namespace {
+
+// One settable parameter: where it lives in Config and the range it must lie in.
+struct Param {
+  std::string key;  // "section.name"
+  std::variant<int*, double*, bool*, std::string*, std::uint64_t*> target;
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+};
+
+std::vector<Param> param_table(Config& c) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  return {
+      {"camera.width", &c.camera.width, 16, 8192},
+      {"camera.height", &c.camera.height, 16, 8192},
+      {"camera.fx", &c.camera.fx, 1, 1e5},
+      {"camera.fy", &c.camera.fy, 1, 1e5},
+      {"camera.cx", &c.camera.cx, 0, 8192},
+      {"camera.cy", &c.camera.cy, 0, 8192},
+      {"camera.k1", &c.camera.distortion[0], -100, 100},
+      {"camera.k2", &c.camera.distortion[1], -100, 100},
+      {"camera.p1", &c.camera.distortion[2], -1, 1},
+      {"camera.p2", &c.camera.distortion[3], -1, 1},
+      {"camera.k3", &c.camera.distortion[4], -100, 100},
+      {"depth.units_per_m", &c.depth.units_per_m, 1e-3, 1e6},
+      {"depth.min_m", &c.depth.min_m, 0.0, 100},
+      {"depth.max_m", &c.depth.max_m, 0.01, 100},
+      {"depth.edge_max_relative_step", &c.depth.edge_max_relative_step, 0.0, inf},
+      {"depth.compensate_timing", &c.depth.compensate_timing},
+      {"features.detector", &c.features.detector},
+      {"features.descriptor", &c.features.descriptor},
+      {"features.max_features", &c.features.max_features, 10, 100000},
+      {"features.border_px", &c.features.border_px, 0, 1000},
+      {"matching.ratio", &c.matching.ratio, 1e-6, 1.0},
+      {"ransac.inlier_threshold_m", &c.ransac.inlier_threshold_m, 1e-5, 10},
+      {"ransac.max_iterations", &c.ransac.max_iterations, 1, 1000000},
+      {"ransac.refine_threshold", &c.ransac.refine_threshold},
+      {"ransac.min_inliers", &c.ransac.min_inliers, 3, 1000000},
+      {"covariance.perturbations", &c.covariance.perturbations, 8, 100000},
+      {"covariance.depth_noise_coeff", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
+      {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},
+      {"seed", &c.seed, 0, 1.8e19},
+  };
+}
+
+Param* find_param(std::vector<Param>& table, const std::string& key) {
+  for (auto& p : table)
+    if (p.key == key) return &p;
+  return nullptr;
+}
+
+double parse_number(const std::string& key, const std::string& text) {
+  double value = 0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end || !std::isfinite(value))
+    throw ConfigError("config key '" + key + "': expected a number, got '" + text + "'");
+  return value;
+}
+
+void check_range(const Param& p, double value) {
+  if (!(value >= p.min && value <= p.max)) {
+    std::ostringstream msg;
+    msg << "config key '" << p.key << "': value " << value << " is outside [" << p.min << ", "
+        << p.max << "]";
+    throw ConfigError(msg.str());
+  }
+}
+
+void check_integral(const Param& p, double value) {
+  if (value != std::floor(value))
+    throw ConfigError("config key '" + p.key + "': expected a whole number, got " +
+                      std::to_string(value));
+}
+
+// Sets a parameter from its text form (command line) after checking type and range.
+void set_from_text(Param& p, const std::string& text) {
+  std::visit(
+      [&](auto* target) {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          *target = text;
+        } else if constexpr (std::is_same_v<T, bool>) {
+          if (text == "true" || text == "1" || text == "on") *target = true;
+          else if (text == "false" || text == "0" || text == "off") *target = false;
+          else throw ConfigError("config key '" + p.key + "': expected true/false, got '" + text + "'");
+        } else {
+          const double v = parse_number(p.key, text);
+          check_range(p, v);
+          if constexpr (!std::is_same_v<T, double>) check_integral(p, v);
+          *target = static_cast<T>(v);
+        }
+      },
+      p.target);
+}
+
+// Sets a parameter from a FileStorage node after checking type and range.
+void set_from_node(Param& p, const cv::FileNode& node) {
+  std::visit(
+      [&](auto* target) {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          if (!node.isString())
+            throw ConfigError("config key '" + p.key + "': expected a string");
+          *target = static_cast<std::string>(node);
+        } else if constexpr (std::is_same_v<T, bool>) {
+          if (node.isString()) set_from_text(p, static_cast<std::string>(node));
+          else if (node.isInt()) set_from_text(p, std::to_string(static_cast<int>(node)));
+          else throw ConfigError("config key '" + p.key + "': expected true/false");
+        } else {
+          if (!node.isReal() && !node.isInt())
+            throw ConfigError("config key '" + p.key + "': expected a number");
+          const double v = static_cast<double>(node);
+          check_range(p, v);
+          if constexpr (!std::is_same_v<T, double>) check_integral(p, v);
+          *target = static_cast<T>(v);
+        }
+      },
+      p.target);
+}
+
+// Intrinsics from an OpenCV calibration file (calibrateCamera's usual output keys).
+void load_calibration_file(Config& c, const std::string& path) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw ConfigError("camera.calibration_file '" + path + "': cannot parse: " + e.what());
+  }
+  if (!fs.isOpened())
+    throw ConfigError("camera.calibration_file '" + path + "': cannot open");
+  cv::Mat K, dist;
+  fs["camera_matrix"] >> K;
+  fs["distortion_coefficients"] >> dist;
+  if (K.rows != 3 || K.cols != 3)
+    throw ConfigError("camera.calibration_file '" + path + "': 'camera_matrix' must be 3x3");
+  K.convertTo(K, CV_64F);
+  c.camera.fx = K.at<double>(0, 0);
+  c.camera.fy = K.at<double>(1, 1);
+  c.camera.cx = K.at<double>(0, 2);
+  c.camera.cy = K.at<double>(1, 2);
+  if (!dist.empty()) {
+    if (dist.total() < 4 || dist.total() > 5)
+      throw ConfigError("camera.calibration_file '" + path +
+                        "': 'distortion_coefficients' must hold 4 or 5 values (k1 k2 p1 p2 [k3])");
+    dist.convertTo(dist, CV_64F);
+    c.camera.distortion = {0, 0, 0, 0, 0};
+    for (size_t i = 0; i < dist.total(); ++i) c.camera.distortion[i] = dist.at<double>(static_cast<int>(i));
+  }
+  int w = 0, h = 0;
+  fs["image_width"] >> w;
+  fs["image_height"] >> h;
+  if (w > 0) c.camera.width = w;
+  if (h > 0) c.camera.height = h;
+}
+
+bool feature2d_exists(const std::string& name) {
+  static const std::set<std::string> known{"ORB", "AKAZE", "BRISK", "SIFT", "KAZE", "FAST", "GFTT", "AGAST"};
+  return known.count(name) != 0;
+}
+
+}  // namespace
+
+Config load_config(const std::string& path) {
+  if (!std::filesystem::exists(path))
+    throw ConfigError("config file '" + path + "' does not exist");
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& e) {
+    throw ConfigError("config file '" + path + "' is not valid YAML: " + e.what());
+  }
+  if (!fs.isOpened()) throw ConfigError("config file '" + path + "' cannot be opened as YAML");
+
+  Config c;
+  auto table = param_table(c);
+  const cv::FileNode root = fs.root();
+  if (!root.isMap()) throw ConfigError("config file '" + path + "' must hold a mapping of sections");
+
+  // The calibration file goes first so that explicit keys in this file still win.
+  const cv::FileNode calib = root["camera"]["calibration_file"];
+  if (!calib.empty()) {
+    std::filesystem::path calib_path = static_cast<std::string>(calib);
+    if (calib_path.is_relative()) calib_path = std::filesystem::path(path).parent_path() / calib_path;
+    load_calibration_file(c, calib_path.string());
+  }
+
+  for (const std::string& section : root.keys()) {
+    const cv::FileNode node = root[section];
+    if (!node.isMap()) {
+      Param* p = find_param(table, section);
+      if (!p) throw ConfigError("config file '" + path + "': unknown key '" + section + "'");
+      set_from_node(*p, node);
+      continue;
+    }
+    for (const std::string& name : node.keys()) {
+      const std::string key = section + "." + name;
+      if (key == "camera.calibration_file") continue;
+      if (key == "camera.distortion") {
+        if (node[name].size() != 5)
+          throw ConfigError("config key 'camera.distortion': expected 5 values [k1, k2, p1, p2, k3]");
+        static const char* const kDistortionKeys[5] = {"camera.k1", "camera.k2", "camera.p1",
+                                                       "camera.p2", "camera.k3"};
+        for (int i = 0; i < 5; ++i) set_from_node(*find_param(table, kDistortionKeys[i]), node[name][i]);
+        continue;
+      }
+      Param* p = find_param(table, key);
+      if (!p) throw ConfigError("config file '" + path + "': unknown key '" + key + "'");
+      set_from_node(*p, node[name]);
+    }
+  }
+  return c;
+}
+
+void apply_overrides(Config& config, const std::vector<std::string>& assignments) {
+  auto table = param_table(config);
+  for (const auto& a : assignments) {
+    const auto eq = a.find('=');
+    if (eq == std::string::npos)
+      throw ConfigError("override '" + a + "': expected KEY=VALUE (for example ransac.max_iterations=300)");
+    const std::string key = a.substr(0, eq);
+    Param* p = find_param(table, key);
+    if (!p) throw ConfigError("override '" + a + "': unknown key '" + key + "'");
+    set_from_text(*p, a.substr(eq + 1));
+  }
+}
+
+std::vector<std::string> config_keys() {
+  Config c;
+  std::vector<std::string> keys;
+  for (const auto& p : param_table(c)) keys.push_back(p.key);
+  return keys;
+}
+
+void validate(const Config& config) {
+  Config copy = config;
+  for (auto& p : param_table(copy)) {
+    std::visit(
+        [&](auto* target) {
+          using T = std::remove_pointer_t<decltype(target)>;
+          if constexpr (!std::is_same_v<T, std::string> && !std::is_same_v<T, bool>)
+            check_range(p, static_cast<double>(*target));
+        },
+        p.target);
+  }
+  const auto& c = config;
+  if (c.depth.min_m >= c.depth.max_m)
+    throw ConfigError("config key 'depth.min_m': must be below depth.max_m");
+  if (c.camera.cx >= c.camera.width || c.camera.cy >= c.camera.height)
+    throw ConfigError("config key 'camera.cx': principal point lies outside the image");
+  if (2 * c.features.border_px >= std::min(c.camera.width, c.camera.height))
+    throw ConfigError("config key 'features.border_px': the border leaves no image");
+  if (!feature2d_exists(c.features.detector))
+    throw ConfigError("config key 'features.detector': unknown detector '" + c.features.detector +
+                      "' (ORB, AKAZE, BRISK, SIFT, KAZE, FAST, GFTT, AGAST)");
+  static const std::set<std::string> descriptors{"ORB", "AKAZE", "BRISK", "SIFT", "KAZE"};
+  if (descriptors.count(c.features.descriptor) == 0)
+    throw ConfigError("config key 'features.descriptor': unknown descriptor '" + c.features.descriptor +
+                      "' (ORB, AKAZE, BRISK, SIFT, KAZE)");
+  if ((c.features.descriptor == "AKAZE") != (c.features.detector == "AKAZE") ||
+      (c.features.descriptor == "KAZE") != (c.features.detector == "KAZE"))
+    throw ConfigError("config key 'features.descriptor': " + c.features.descriptor +
+                      " descriptors need the matching (A)KAZE detector");
+  if (c.ransac.min_inliers < 3)
+    throw ConfigError("config key 'ransac.min_inliers': a rigid motion needs at least 3");
+}
+
+}  // namespace rgbdo

@@ -1,0 +1,52 @@
+#include "rgbd_odometry/covariance.hpp"
+
+#include <Eigen/Cholesky>
+
+#include "rgbd_odometry/noise_model.hpp"
+#include "rgbd_odometry/umeyama.hpp"
+
+namespace rgbdo {
+
+bool is_valid_covariance(const Matrix6d& c) {
+  if (!c.allFinite()) return false;
+  if (!c.isApprox(c.transpose(), 1e-9)) return false;
+  const Eigen::LLT<Matrix6d> llt(c);
+  return llt.info() == Eigen::Success;
+}
+
+bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                      std::mt19937_64& rng, Matrix6d& covariance) {
+  const size_t n = prev.size();
+  const double c = config_.depth_noise_coeff;
+  sigma_prev_.resize(n);
+  sigma_curr_.resize(n);
+  weights_.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    sigma_prev_[k] = point_sigma(prev[k], c);
+    sigma_curr_[k] = point_sigma(curr[k], c);
+    weights_[k] = pair_weight(prev[k], curr[k], c);  // the same weights as the estimate's own fit
+  }
+  noisy_prev_.resize(n);
+  noisy_curr_.resize(n);
+  samples_.clear();
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int s = 0; s < config_.perturbations; ++s) {
+    for (size_t k = 0; k < n; ++k) {
+      noisy_prev_[k] = prev[k] + sigma_prev_[k].cwiseProduct(Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)));
+      noisy_curr_[k] = curr[k] + sigma_curr_[k].cwiseProduct(Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)));
+    }
+    Eigen::Isometry3d T;
+    if (!fit_rigid(noisy_curr_, noisy_prev_, weights_, T)) return false;
+    samples_.push_back(xi_from_transform(T));
+  }
+  Vector6d mean = Vector6d::Zero();
+  for (const auto& x : samples_) mean += x;
+  mean /= static_cast<double>(samples_.size());
+  covariance.setZero();
+  for (const auto& x : samples_) covariance += (x - mean) * (x - mean).transpose();
+  covariance *= config_.scale / static_cast<double>(samples_.size() - 1);
+  covariance = 0.5 * (covariance + covariance.transpose());  // exact symmetry for consumers
+  return is_valid_covariance(covariance);
+}
+
+}  // namespace rgbdo

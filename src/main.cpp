@@ -1,0 +1,40 @@
+// rgbd-odometry: RGB-D visual odometry with covariance (Willis & Brink, PLANS 2016).
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "rgbd_odometry/config.hpp"
+#include "rgbd_odometry/replay.hpp"
+#include "rgbd_odometry/version.hpp"
+
+int main(int argc, char** argv) {
+  rgbdo::RunOptions options;
+  CLI::App app{"rgbd-odometry: frame-to-frame RGB-D odometry with a 6x6 covariance per pair"};
+  app.set_version_flag("--version", std::string("rgbd-odometry ") + rgbdo::kVersion);
+  app.add_option("--source", options.source, "frame source URI: tum:DIR (a TUM RGB-D sequence)")->required();
+  app.add_option("--config", options.config_path, "YAML configuration (e.g. deploy/config/tum-fr1.yaml)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--set", options.overrides, "override a configuration key: --set ransac.max_iterations=300")
+      ->type_name("KEY=VALUE");
+  std::string detector, seed, max_features, scale;
+  app.add_option("--detector", detector, "shorthand for --set features.detector=NAME --set features.descriptor=NAME");
+  app.add_option("--max-features", max_features, "shorthand for --set features.max_features=N");
+  app.add_option("--covariance-scale", scale, "shorthand for --set covariance.scale=S");
+  app.add_option("--seed", seed, "shorthand for --set seed=N");
+  app.add_option("--log", options.log_path, "write the odometry CSV log here");
+  app.add_option("--trajectory", options.trajectory_path, "write the integrated trajectory (TUM format) here");
+  app.add_option("--max-frames", options.max_frames, "stop after this many frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_flag("--start-at-groundtruth", options.start_at_groundtruth,
+               "start the trajectory at the first frame's ground-truth pose");
+  app.add_flag("-q,--quiet", options.quiet, "no per-pair lines, only the summary");
+  app.add_flag("-v,--verbose", options.verbose, "per-pair stage times and counts");
+  CLI11_PARSE(app, argc, argv);
+
+  if (!detector.empty()) {
+    options.overrides.push_back("features.detector=" + detector);
+    options.overrides.push_back("features.descriptor=" + detector);
+  }
+  if (!max_features.empty()) options.overrides.push_back("features.max_features=" + max_features);
+  if (!scale.empty()) options.overrides.push_back("covariance.scale=" + scale);
+  if (!seed.empty()) options.overrides.push_back("seed=" + seed);
+  return rgbdo::run_odometry(options, std::cout, std::cerr);
+}

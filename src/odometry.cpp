@@ -1,0 +1,148 @@
+#include "rgbd_odometry/odometry.hpp"
+
+#include <chrono>
+
+#include "rgbd_odometry/mask.hpp"
+
+namespace rgbdo {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+MotionPrior motion_from(const Eigen::Isometry3d& T_prev_curr, double dt_s) {
+  MotionPrior m;
+  m.velocity_mps = T_prev_curr.translation() / dt_s;
+  m.angular_velocity_radps = rotation_vector(T_prev_curr.linear()) / dt_s;
+  return m;
+}
+
+// Decorrelates the per-pair random streams while keeping every pair replayable from the seed.
+std::uint64_t mix(std::uint64_t seed, std::uint64_t index) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (index + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+OdometryPipeline::OdometryPipeline(const Config& config)
+    : config_(config),
+      detector_(config.features),
+      matcher_(config.matching.ratio),
+      backprojector_(config.camera, config.depth),
+      ransac_(config.ransac, config.covariance.depth_noise_coeff),
+      covariance_(config.covariance) {}
+
+void OdometryPipeline::extract(const RgbdFrame& frame, ProcessedFrame& out) {
+  out.times = {frame.t_colour_ns, frame.t_depth_ns};
+  out.status = frame.status;
+  out.features.keypoints.clear();
+  out.geometry.clear();
+  if (frame.status != Status::Ok) return;
+  if (frame.gray.empty() || frame.depth_m.empty() || frame.gray.size() != frame.depth_m.size()) {
+    out.status = Status::BadFrame;
+    return;
+  }
+  build_feature_mask(frame.depth_m, config_.depth, config_.features.border_px, mask_);
+  if (cv::countNonZero(mask_) == 0) {
+    out.status = Status::NoDepth;
+    return;
+  }
+  detector_.detect(frame.gray, mask_, out.features);
+  backprojector_.compute(out.features.keypoints, frame.depth_m, out.geometry);
+  if (static_cast<int>(out.features.keypoints.size()) < config_.ransac.min_inliers) out.status = Status::TooFewFeatures;
+}
+
+std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
+  const auto start = Clock::now();
+  extract(frame, curr_);
+  last_detect_ms_ = ms_since(start);
+  std::optional<PairResult> result;
+  if (have_prev_) {
+    result = estimate(prev_, curr_, pair_index_++);
+    result->times.detect_ms = last_detect_ms_;
+  }
+  std::swap(prev_, curr_);  // swap, not copy: buffers are reused frame after frame
+  have_prev_ = true;
+  return result;
+}
+
+PairResult OdometryPipeline::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index) {
+  PairResult r;
+  r.t_prev_ns = prev.times.t_colour_ns;
+  r.t_curr_ns = curr.times.t_colour_ns;
+  r.features_prev = static_cast<int>(prev.features.keypoints.size());
+  r.features_curr = static_cast<int>(curr.features.keypoints.size());
+  const auto fail = [&](Status s) {
+    r.status = s;
+    last_motion_.reset();  // a gap: the old velocity says nothing about the next pair
+    return r;
+  };
+  if (prev.status != Status::Ok) return fail(prev.status);
+  if (curr.status != Status::Ok) return fail(curr.status);
+  const double dt_s = static_cast<double>(r.t_curr_ns - r.t_prev_ns) * 1e-9;
+
+  auto t0 = Clock::now();
+  matcher_.match(prev.features.descriptors, curr.features.descriptors, matches_);
+  r.matches = static_cast<int>(matches_.size());
+  r.times.match_ms = ms_since(t0);
+  if (r.matches < config_.ransac.min_inliers) return fail(Status::TooFewMatches);
+
+  const bool compensate = config_.depth.compensate_timing && dt_s > 0;
+  // Before this pair is solved, the previous pair's velocity is the best guess (zero after a gap).
+  const MotionPrior prior = last_motion_.value_or(MotionPrior{});
+  t0 = Clock::now();
+  build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, compensate ? &prior : nullptr,
+                    pairs_);
+  r.point_pairs = static_cast<int>(pairs_.size());
+  r.times.backproject_ms = ms_since(t0);
+  if (r.point_pairs < config_.ransac.min_inliers) return fail(Status::TooFewMatches);
+
+  std::mt19937_64 rng(mix(config_.seed, pair_index));
+  t0 = Clock::now();
+  RansacResult fit = ransac_.estimate(pairs_.prev, pairs_.curr, rng);
+  r.times.ransac_ms = ms_since(t0);
+  if (fit.status != Status::Ok) return fail(fit.status);
+
+  if (compensate) {
+    // Second pass: carry the depths to colour time with this pair's own velocity, which is
+    // better than the previous pair's whenever the depth frames are far enough apart.
+    t0 = Clock::now();
+    const MotionPrior own = motion_from(fit.T_prev_curr, dt_s);
+    build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, &own, pairs_);
+    r.times.backproject_ms += ms_since(t0);
+    t0 = Clock::now();
+    RansacResult refined = ransac_.refine(pairs_.prev, pairs_.curr, fit.T_prev_curr);
+    r.times.ransac_ms += ms_since(t0);
+    if (refined.status == Status::Ok) {
+      refined.hypotheses = fit.hypotheses;
+      fit = std::move(refined);
+    }
+  }
+
+  inlier_prev_.clear();
+  inlier_curr_.clear();
+  for (int k : fit.inliers) {
+    inlier_prev_.push_back(pairs_.prev[static_cast<size_t>(k)]);
+    inlier_curr_.push_back(pairs_.curr[static_cast<size_t>(k)]);
+  }
+  t0 = Clock::now();
+  Matrix6d cov;
+  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, rng, cov);
+  r.times.covariance_ms = ms_since(t0);
+  if (!cov_ok) return fail(Status::CovarianceFailed);
+
+  r.status = Status::Ok;
+  r.inliers = static_cast<int>(fit.inliers.size());
+  r.inlier_threshold_m = fit.threshold_m;
+  r.T_prev_curr = fit.T_prev_curr;
+  r.covariance = cov;
+  if (dt_s > 0) last_motion_ = motion_from(fit.T_prev_curr, dt_s);
+  return r;
+}
+
+}  // namespace rgbdo
