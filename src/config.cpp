@@ -52,6 +52,8 @@ std::vector<Param> param_table(Config& c) {
       {"ransac.min_inliers", &c.ransac.min_inliers, 3, 1000000},
       {"covariance.perturbations", &c.covariance.perturbations, 8, 100000},
       {"covariance.depth_noise_coeff", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
+      {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100},
+      {"covariance.residual_variance_factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},
       {"seed", &c.seed, 0, 1.8e19},
   };

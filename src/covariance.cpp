@@ -1,6 +1,7 @@
 #include "rgbd_odometry/covariance.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 
 #include "rgbd_odometry/noise_model.hpp"
 #include "rgbd_odometry/umeyama.hpp"
@@ -14,8 +15,21 @@ bool is_valid_covariance(const Matrix6d& c) {
   return llt.info() == Eigen::Success;
 }
 
+double PerturbationCovariance::variance_factor(const std::vector<Eigen::Vector3d>& prev,
+                                               const std::vector<Eigen::Vector3d>& curr,
+                                               const Eigen::Isometry3d& T_prev_curr, double depth_noise_coeff) {
+  const size_t n = prev.size();
+  if (n < 3) return 1.0;
+  double sum = 0;
+  for (size_t k = 0; k < n; ++k)
+    sum += pair_weight(prev[k], curr[k], depth_noise_coeff) * (prev[k] - T_prev_curr * curr[k]).squaredNorm();
+  // 3n residual components, 6 parameters; each weighted residual carries 3 components.
+  return std::max(1.0, sum / (static_cast<double>(n) - 2.0));
+}
+
 bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                      std::mt19937_64& rng, Matrix6d& covariance) {
+                                      const Eigen::Isometry3d& T_prev_curr, std::mt19937_64& rng,
+                                      Matrix6d& covariance) {
   const size_t n = prev.size();
   const double c = config_.depth_noise_coeff;
   sigma_prev_.resize(n);
@@ -44,7 +58,9 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
   mean /= static_cast<double>(samples_.size());
   covariance.setZero();
   for (const auto& x : samples_) covariance += (x - mean) * (x - mean).transpose();
-  covariance *= config_.scale / static_cast<double>(samples_.size() - 1);
+  double factor = config_.scale;
+  if (config_.residual_variance_factor) factor *= variance_factor(prev, curr, T_prev_curr, c);
+  covariance *= factor / static_cast<double>(samples_.size() - 1);
   covariance = 0.5 * (covariance + covariance.transpose());  // exact symmetry for consumers
   return is_valid_covariance(covariance);
 }

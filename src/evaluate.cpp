@@ -46,6 +46,7 @@ void AccuracyEvaluator::add(const PairResult& r, const Eigen::Isometry3d& pose) 
   rpe_r_.push_back(rotation_angle(error.linear()) * kRadToDeg);
   const Vector6d e = xi_from_transform(r.T_prev_curr) - xi_from_transform(gt_rel);
   nees_.push_back(e.dot(r.covariance.ldlt().solve(e)));
+  axis_nees_sum_ += e.cwiseAbs2().cwiseQuotient(r.covariance.diagonal());
 }
 
 AccuracySummary AccuracyEvaluator::summary() const {
@@ -61,7 +62,9 @@ AccuracySummary AccuracyEvaluator::summary() const {
     s.median_nees = error_stats(nees_).median;
     s.nees_within_95 = static_cast<double>(std::count_if(nees_.begin(), nees_.end(), [](double x) { return x < kChi2_6_95; })) /
                        static_cast<double>(nees_.size());
-    s.consistent_scale = scale_used_ * s.mean_nees / 6.0;
+    s.axis_nees = axis_nees_sum_ / static_cast<double>(nees_.size());
+    s.mean_axis_nees = s.axis_nees.mean();
+    s.consistent_scale = scale_used_ * s.mean_axis_nees;
   }
   // Drift: relative pose error of the integrated trajectory over 1-second windows.
   std::vector<double> drift_t, drift_r;

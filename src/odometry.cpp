@@ -34,7 +34,7 @@ OdometryPipeline::OdometryPipeline(const Config& config)
       detector_(config.features),
       matcher_(config.matching.ratio),
       backprojector_(config.camera, config.depth),
-      ransac_(config.ransac, config.covariance.depth_noise_coeff),
+      ransac_(config.ransac, SensorNoise{config.covariance.depth_noise_coeff, config.covariance.pixel_sigma_px, config.camera.fx}),
       covariance_(config.covariance) {}
 
 void OdometryPipeline::extract(const RgbdFrame& frame, ProcessedFrame& out) {
@@ -132,7 +132,7 @@ PairResult OdometryPipeline::estimate(const ProcessedFrame& prev, const Processe
   }
   t0 = Clock::now();
   Matrix6d cov;
-  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, rng, cov);
+  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit.T_prev_curr, rng, cov);
   r.times.covariance_ms = ms_since(t0);
   if (!cov_ok) return fail(Status::CovarianceFailed);
 

@@ -16,8 +16,42 @@ constexpr double kMinSampleSine = 0.1;         // ~6 degrees: flatter triangles 
 
 }  // namespace
 
-RigidRansac::RigidRansac(const RansacConfig& ransac, double depth_noise_coeff)
-    : config_(ransac), depth_noise_coeff_(depth_noise_coeff) {}
+RigidRansac::RigidRansac(const RansacConfig& ransac, const SensorNoise& noise) : config_(ransac), noise_(noise) {}
+
+Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d>& prev,
+                                               const std::vector<Eigen::Vector3d>& curr,
+                                               const std::vector<int>& inliers, Eigen::Isometry3d T) const {
+  constexpr int kIterations = 5;
+  using Matrix6d = Eigen::Matrix<double, 6, 6>;
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  for (int it = 0; it < kIterations; ++it) {
+    Matrix6d H = Matrix6d::Zero();
+    Vector6d g = Vector6d::Zero();
+    for (int k : inliers) {
+      const Eigen::Vector3d& p = prev[static_cast<size_t>(k)];
+      const Eigen::Vector3d y = T * curr[static_cast<size_t>(k)];
+      const Eigen::Vector3d r = p - y;
+      const Eigen::Matrix3d C = point_covariance(p, noise_) +
+                                T.linear() * point_covariance(curr[static_cast<size_t>(k)], noise_) * T.linear().transpose();
+      const Eigen::Matrix3d W = C.inverse();
+      // r(delta) = p - exp(delta) y ~ r - dt + [y]x dw  =>  J = [-I, [y]x]
+      Eigen::Matrix<double, 3, 6> J;
+      J.leftCols<3>() = -Eigen::Matrix3d::Identity();
+      J.rightCols<3>() << 0, -y.z(), y.y(), y.z(), 0, -y.x(), -y.y(), y.x(), 0;
+      H += J.transpose() * W * J;
+      g += J.transpose() * W * r;
+    }
+    const Vector6d delta = -H.ldlt().solve(g);
+    if (!delta.allFinite()) break;
+    Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+    const double angle = delta.tail<3>().norm();
+    if (angle > 0) step.linear() = Eigen::AngleAxisd(angle, delta.tail<3>() / angle).toRotationMatrix();
+    step.translation() = delta.head<3>();
+    T = step * T;
+    if (delta.norm() < 1e-10) break;
+  }
+  return T;
+}
 
 bool RigidRansac::sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev,
                                        const std::vector<Eigen::Vector3d>& curr, const int* idx) const {
@@ -122,7 +156,7 @@ RansacResult RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const
     for (int k : inliers) {
       fit_prev_.push_back(prev[static_cast<size_t>(k)]);
       fit_curr_.push_back(curr[static_cast<size_t>(k)]);
-      fit_weights_.push_back(pair_weight(fit_prev_.back(), fit_curr_.back(), depth_noise_coeff_));
+      fit_weights_.push_back(pair_weight(fit_prev_.back(), fit_curr_.back(), noise_.depth_noise_coeff));
     }
     Eigen::Isometry3d T;
     if (!fit_rigid(fit_curr_, fit_prev_, fit_weights_, T)) break;
@@ -134,6 +168,7 @@ RansacResult RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const
     threshold = std::min(3 * sigma, config_.inlier_threshold_m);
   }
   result.threshold_m = threshold;
+  if (inliers.size() >= 3) result.T_prev_curr = fit_anisotropic(prev, curr, inliers, result.T_prev_curr);
   result.status = static_cast<int>(inliers.size()) >= config_.min_inliers ? Status::Ok : Status::RansacFailed;
   return result;
 }

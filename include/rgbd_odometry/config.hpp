@@ -51,8 +51,12 @@ struct RansacConfig {
 struct CovarianceConfig {
   int perturbations = 100;
   double depth_noise_coeff = 1.425e-3;  // sigma_Z = coeff * Z^2 (Willis & Brink eq. 2), 1/m
+  // Keypoint localisation error, used with the depth noise to weight the final fit.
+  double pixel_sigma_px = 0.25;
+  // Multiply by the fit's a-posteriori variance factor (covariance.hpp); false: the paper.
+  bool residual_variance_factor = true;
   // Multiplies the sample covariance before it is reported; see README "Covariance scale".
-  double scale = 1.0;
+  double scale = 12.0;
 };
 
 struct Config {

@@ -3,6 +3,13 @@
 // The inlier point pairs are perturbed N times with the sensor noise model, each perturbed
 // pair of clouds is aligned again, and the unbiased sample covariance of the N parameter
 // vectors xi = (t, rotation vector) is the estimate, multiplied by the configured scale.
+//
+// The noise model is a lower bound: real keypoints are off by more than it predicts
+// (localisation, depth quantisation, registration). With `residual_variance_factor` the
+// sample covariance is also multiplied by the a-posteriori variance factor of the fit,
+//   s0^2 = sum_k w_k |prev_k - T curr_k|^2 / (n - 2),  floored at 1,
+// the least-squares estimate of how much noisier this pair's points are than modelled:
+// a pair with sloppy inliers then reports a proportionally larger covariance.
 #include <Eigen/Geometry>
 #include <random>
 #include <vector>
@@ -16,9 +23,14 @@ class PerturbationCovariance {
  public:
   explicit PerturbationCovariance(const CovarianceConfig& config) : config_(config) {}
 
-  // prev[k] ~ T curr[k]; returns false when the result is not finite, symmetric, positive definite.
+  // prev[k] ~ T curr[k] (the inliers and the fitted motion); returns false when the result
+  // is not finite, symmetric and positive definite.
   [[nodiscard]] bool estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                              std::mt19937_64& rng, Matrix6d& covariance);
+                              const Eigen::Isometry3d& T_prev_curr, std::mt19937_64& rng, Matrix6d& covariance);
+
+  // s0^2 of the fit (>= 1), as described above.
+  static double variance_factor(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                const Eigen::Isometry3d& T_prev_curr, double depth_noise_coeff);
 
  private:
   CovarianceConfig config_;

@@ -29,7 +29,11 @@ struct AccuracySummary {
   ErrorStats drift_translation_mps, drift_rotation_degps;  // over 1-second windows
   double mean_nees = 0, median_nees = 0;
   double nees_within_95 = 0;  // fraction of pairs with NEES below chi2_6(0.95) = 12.59
-  // The covariance.scale that would have made the mean NEES equal 6, given the one used.
+  // Per-axis consistency of the diagonal (what EKF2/EKF3 fuse): mean of e_i^2 / C_ii over
+  // pairs, for xi = (tx, ty, tz, rx, ry, rz); 1 when the variances match the errors.
+  Eigen::Matrix<double, 6, 1> axis_nees = Eigen::Matrix<double, 6, 1>::Zero();
+  double mean_axis_nees = 0;
+  // The covariance.scale that would have made mean_axis_nees equal 1, given the one used.
   double consistent_scale = 0;
 };
 
@@ -47,6 +51,7 @@ class AccuracyEvaluator {
   int pairs_ = 0;
   std::map<std::string, int> failures_;
   std::vector<double> rpe_t_, rpe_r_, nees_;
+  Eigen::Matrix<double, 6, 1> axis_nees_sum_ = Eigen::Matrix<double, 6, 1>::Zero();
   std::vector<std::pair<std::int64_t, Eigen::Isometry3d>> trajectory_;
 };
 

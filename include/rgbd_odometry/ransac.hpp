@@ -3,13 +3,15 @@
 // Hypotheses from random 3-point samples are scored by their inlier count at lambda_inlier;
 // the best is then refined as PCL's refineModel does: fit all inliers by least squares,
 // shrink the threshold to min(3 sigma_inliers, lambda_inlier), re-select, until stable.
-// The final fit weights each pair by the sensor noise model (far points count less).
+// The final fit minimises the Mahalanobis residual under the ray-aligned sensor noise
+// (noise_model.hpp): depth errors along the viewing ray are cheap, lateral ones are not.
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <random>
 #include <vector>
 
 #include "rgbd_odometry/config.hpp"
+#include "rgbd_odometry/noise_model.hpp"
 #include "rgbd_odometry/status.hpp"
 
 namespace rgbdo {
@@ -24,7 +26,7 @@ struct RansacResult {
 
 class RigidRansac {
  public:
-  RigidRansac(const RansacConfig& ransac, double depth_noise_coeff);
+  RigidRansac(const RansacConfig& ransac, const SensorNoise& noise);
 
   // prev[k] ~ T * curr[k] for inliers k.
   [[nodiscard]] RansacResult estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
@@ -37,8 +39,11 @@ class RigidRansac {
  private:
   bool sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                             const int* idx) const;
+  // Gauss-Newton on sum_k r_k^T (C_prev + R C_curr R^T)^-1 r_k over the inliers, from T.
+  Eigen::Isometry3d fit_anisotropic(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                    const std::vector<int>& inliers, Eigen::Isometry3d T) const;
   RansacConfig config_;
-  double depth_noise_coeff_;
+  SensorNoise noise_;
   std::vector<int> scratch_inliers_;
   std::vector<Eigen::Vector3d> fit_prev_, fit_curr_;
   std::vector<double> fit_weights_;
