@@ -82,8 +82,9 @@ PairResult OdometryPipeline::estimate(const ProcessedFrame& prev, const Processe
     last_motion_.reset();  // a gap: the old velocity says nothing about the next pair
     return r;
   };
-  if (prev.status != Status::Ok) return fail(prev.status);
+  // The newer frame's problem is the news; the older one's was reported with its own pair.
   if (curr.status != Status::Ok) return fail(curr.status);
+  if (prev.status != Status::Ok) return fail(prev.status);
   const double dt_s = static_cast<double>(r.t_curr_ns - r.t_prev_ns) * 1e-9;
 
   auto t0 = Clock::now();

@@ -1,0 +1,106 @@
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+
+#include "rgbd_odometry/backproject.hpp"
+
+namespace rgbdo {
+namespace {
+
+CameraConfig fr1_camera() {
+  CameraConfig c;
+  c.fx = 517.306408;
+  c.fy = 516.469215;
+  c.cx = 318.643040;
+  c.cy = 255.313989;
+  c.distortion = {0.262383, -0.953104, -0.005358, 0.002628, 1.163314};
+  return c;
+}
+
+cv::Mat plane(double z) { return cv::Mat(480, 640, CV_32F, cv::Scalar(z)); }
+
+TEST(BackProject, InvertsTheDistortedPinholeProjection) {
+  // GIVEN points on the plane Z = 2 projected through the fr1 lens model
+  CameraConfig cam = fr1_camera();
+  const std::vector<cv::Point3d> points{{0, 0, 2}, {0.8, 0.5, 2}, {-0.9, -0.6, 2}, {0.3, -0.7, 2}};
+  std::vector<cv::Point2d> pixels;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K,
+                    cv::Mat(1, 5, CV_64F, cam.distortion.data()), pixels);
+  std::vector<cv::KeyPoint> kps;
+  for (const auto& p : pixels) kps.emplace_back(cv::Point2f(static_cast<float>(p.x), static_cast<float>(p.y)), 7.f);
+  // WHEN they are back-projected with the plane's depth image
+  KeypointBackProjector bp(cam, DepthConfig{});
+  KeypointGeometry g;
+  bp.compute(kps, plane(2.0), g);
+  // THEN the 3-D points come back (float keypoint coordinates: ~1e-5 px)
+  for (size_t i = 0; i < points.size(); ++i) {
+    ASSERT_GT(g.depth_m[i], 0);
+    EXPECT_NEAR(g.normalized[i].x() * g.depth_m[i], points[i].x, 1e-4);
+    EXPECT_NEAR(g.normalized[i].y() * g.depth_m[i], points[i].y, 1e-4);
+    EXPECT_DOUBLE_EQ(g.depth_m[i], 2.0);
+  }
+  // Without the distortion model the corner point would be off by centimetres.
+  EXPECT_GT(std::abs((pixels[2].x - cam.cx) / cam.fx * 2.0 - points[2].x), 0.01);
+}
+
+TEST(BackProject, RejectsOcclusionEdgesHolesAndOutOfRange) {
+  cv::Mat depth = plane(1.5);
+  depth.colRange(320, 640).setTo(3.0);  // a depth step at column 320
+  depth.at<float>(100, 100) = 0;         // a hole
+  depth.rowRange(400, 480).setTo(9.0);   // beyond max_m
+  const std::vector<cv::KeyPoint> kps{{{200.f, 200.f}, 7.f}, {{319.f, 200.f}, 7.f}, {{101.f, 101.f}, 7.f},
+                                      {{500.f, 450.f}, 7.f}, {{1.f, 1.f}, 7.f}};
+  KeypointBackProjector bp(fr1_camera(), DepthConfig{});
+  KeypointGeometry g;
+  bp.compute(kps, depth, g);
+  EXPECT_DOUBLE_EQ(g.depth_m[0], 1.5);  // clean surface
+  EXPECT_EQ(g.depth_m[1], 0);           // 1 px from the step
+  EXPECT_EQ(g.depth_m[2], 0);           // hole in the neighbourhood
+  EXPECT_EQ(g.depth_m[3], 0);           // out of range
+  EXPECT_EQ(g.depth_m[4], 0);           // neighbourhood leaves the image
+}
+
+TEST(BackProject, TimingCompensationMovesDepthToTheColourInstant) {
+  // GIVEN a camera approaching a wall at 0.3 m/s; the wall is 2 m away at t = 0.
+  // Depth images are taken 15 ms before (prev) and 15 ms after (curr) their colour images.
+  const double v = 0.3, dt = 1.0 / 30, off = 0.015;
+  const auto wall_at = [&](double t) { return plane(2.0 - v * t); };
+  CameraConfig cam = fr1_camera();
+  cam.distortion = {0, 0, 0, 0, 0};
+  KeypointBackProjector bp(cam, DepthConfig{});
+  const std::vector<cv::KeyPoint> kps{{{300.f, 200.f}, 7.f}};
+  KeypointGeometry prev, curr;
+  bp.compute(kps, wall_at(-off), prev);
+  bp.compute(kps, wall_at(dt + off), curr);
+  const FrameTimes prev_t{0, -15'000'000}, curr_t{33'333'333, 33'333'333 + 15'000'000};
+  const std::vector<Match> matches{{0, 0, 0}};
+  PointPairs raw, compensated;
+  build_point_pairs(matches, prev, prev_t, curr, curr_t, nullptr, raw);
+  MotionPrior prior;
+  prior.velocity_mps = Eigen::Vector3d(0, 0, v);
+  build_point_pairs(matches, prev, prev_t, curr, curr_t, &prior, compensated);
+  ASSERT_EQ(raw.size(), 1u);
+  // THEN the raw depths are 4.5 mm off each, in opposite directions; compensated they are exact
+  EXPECT_NEAR(raw.prev[0].z(), 2.0 + v * off, 1e-6);
+  EXPECT_NEAR(raw.curr[0].z(), 2.0 - v * (dt + off), 1e-6);
+  EXPECT_NEAR(compensated.prev[0].z(), 2.0, 1e-6);
+  EXPECT_NEAR(compensated.curr[0].z(), 2.0 - v * dt, 1e-6);
+}
+
+TEST(BackProject, PairsNeedDepthOnBothSides) {
+  cv::Mat with_hole = plane(1.0);
+  with_hole.at<float>(50, 50) = 0;
+  const std::vector<cv::KeyPoint> kps{{{50.f, 50.f}, 7.f}, {{200.f, 200.f}, 7.f}};
+  KeypointBackProjector bp(fr1_camera(), DepthConfig{});
+  KeypointGeometry a, b;
+  bp.compute(kps, with_hole, a);
+  bp.compute(kps, plane(1.0), b);
+  PointPairs pairs;
+  build_point_pairs({{0, 0, 0}, {1, 1, 0}}, a, {}, b, {}, nullptr, pairs);
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs.match_index[0], 1);
+}
+
+}  // namespace
+}  // namespace rgbdo

@@ -1,0 +1,120 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "rgbd_odometry/config.hpp"
+
+namespace rgbdo {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ConfigFile : public ::testing::Test {
+ protected:
+  fs::path dir = fs::temp_directory_path() / ("rgbdo_config_" + std::to_string(::getpid()));
+  void SetUp() override { fs::create_directories(dir); }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+};
+
+// The message must name the key, so a user can find the line.
+void expect_error_naming(const std::function<void()>& f, const std::string& needle) {
+  try {
+    f();
+    FAIL() << "expected ConfigError mentioning " << needle;
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+TEST(Config, DefaultsAreThePapersTable1) {
+  const Config c;
+  EXPECT_EQ(c.features.detector, "ORB");
+  EXPECT_EQ(c.features.descriptor, "ORB");
+  EXPECT_DOUBLE_EQ(c.matching.ratio, 0.8);
+  EXPECT_DOUBLE_EQ(c.ransac.inlier_threshold_m, 0.05);
+  EXPECT_EQ(c.ransac.max_iterations, 200);
+  EXPECT_EQ(c.covariance.perturbations, 100);
+  EXPECT_DOUBLE_EQ(c.covariance.depth_noise_coeff, 1.425e-3);
+  EXPECT_NO_THROW(validate(c));
+}
+
+TEST(Config, ShippedFr1ConfigLoadsWithTumCalibration) {
+  const Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  EXPECT_DOUBLE_EQ(c.camera.fx, 517.306408);
+  EXPECT_DOUBLE_EQ(c.camera.cy, 255.313989);
+  EXPECT_DOUBLE_EQ(c.camera.distortion[0], 0.262383);
+  EXPECT_DOUBLE_EQ(c.camera.distortion[4], 1.163314);
+  EXPECT_DOUBLE_EQ(c.depth.units_per_m, 5000);
+  EXPECT_NO_THROW(validate(c));
+}
+
+TEST_F(ConfigFile, UnknownKeyIsRejectedByName) {
+  const auto p = write("a.yaml", "%YAML:1.0\n---\nransac:\n  max_iteration: 5\n");
+  expect_error_naming([&] { load_config(p); }, "ransac.max_iteration");
+}
+
+TEST_F(ConfigFile, OutOfRangeAndWrongTypeAreRejectedByName) {
+  expect_error_naming([&] { load_config(write("b.yaml", "%YAML:1.0\n---\nmatching:\n  ratio: 1.5\n")); },
+                      "matching.ratio");
+  expect_error_naming([&] { load_config(write("c.yaml", "%YAML:1.0\n---\nfeatures:\n  max_features: many\n")); },
+                      "features.max_features");
+  expect_error_naming([&] { load_config(write("d.yaml", "%YAML:1.0\n---\nransac:\n  max_iterations: 2.5\n")); },
+                      "ransac.max_iterations");
+  expect_error_naming([&] { load_config(write("e.yaml", "%YAML:1.0\n---\ncamera:\n  distortion: [1, 2]\n")); },
+                      "camera.distortion");
+}
+
+TEST_F(ConfigFile, MissingAndCorruptFilesAreNamed) {
+  expect_error_naming([&] { load_config((dir / "none.yaml").string()); }, "none.yaml");
+  expect_error_naming([&] { load_config(write("bad.yaml", "%YAML:1.0\n---\ncamera: [1, {\n")); }, "bad.yaml");
+}
+
+TEST_F(ConfigFile, IntrinsicsFromAnOpenCvCalibrationFile) {
+  write("calib.yaml",
+        "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n"
+        "  dt: d\n  data: [600., 0., 320., 0., 601., 240., 0., 0., 1.]\ndistortion_coefficients: !!opencv-matrix\n"
+        "  rows: 1\n  cols: 5\n  dt: d\n  data: [0.1, -0.2, 0.001, 0.002, 0.3]\n");
+  const auto p = write("main.yaml", "%YAML:1.0\n---\ncamera:\n  calibration_file: calib.yaml\n  cy: 241.0\n");
+  const Config c = load_config(p);
+  EXPECT_DOUBLE_EQ(c.camera.fx, 600);
+  EXPECT_DOUBLE_EQ(c.camera.fy, 601);
+  EXPECT_DOUBLE_EQ(c.camera.cy, 241.0);  // the file's own key wins over the calibration
+  EXPECT_DOUBLE_EQ(c.camera.distortion[4], 0.3);
+}
+
+TEST(ConfigOverrides, CommandLineValuesWinAndAreChecked) {
+  Config c;
+  apply_overrides(c, {"ransac.max_iterations=300", "features.detector=AKAZE", "depth.compensate_timing=false", "seed=9"});
+  EXPECT_EQ(c.ransac.max_iterations, 300);
+  EXPECT_EQ(c.features.detector, "AKAZE");
+  EXPECT_FALSE(c.depth.compensate_timing);
+  EXPECT_EQ(c.seed, 9u);
+  expect_error_naming([&] { apply_overrides(c, {"ransac.max_iterations"}); }, "KEY=VALUE");
+  expect_error_naming([&] { apply_overrides(c, {"nope.key=1"}); }, "nope.key");
+  expect_error_naming([&] { apply_overrides(c, {"covariance.perturbations=2"}); }, "covariance.perturbations");
+}
+
+TEST(ConfigValidation, CrossFieldChecksNameTheKey) {
+  Config c;
+  c.depth.min_m = 5;
+  expect_error_naming([&] { validate(c); }, "depth.min_m");
+  c = Config{};
+  c.features.detector = "SURF";
+  expect_error_naming([&] { validate(c); }, "features.detector");
+  c = Config{};
+  c.features.detector = "ORB";
+  c.features.descriptor = "AKAZE";
+  expect_error_naming([&] { validate(c); }, "features.descriptor");
+  c = Config{};
+  c.features.border_px = 400;
+  expect_error_naming([&] { validate(c); }, "features.border_px");
+}
+
+}  // namespace
+}  // namespace rgbdo

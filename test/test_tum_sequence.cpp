@@ -1,0 +1,118 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "rgbd_odometry/tum_sequence.hpp"
+
+namespace rgbdo {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(Timestamps, ParsedExactlyToNanoseconds) {
+  EXPECT_EQ(parse_timestamp_ns("1305031102.175304"), 1305031102175304000LL);
+  EXPECT_EQ(parse_timestamp_ns("12"), 12000000000LL);
+  EXPECT_FALSE(parse_timestamp_ns("12.x"));
+  EXPECT_FALSE(parse_timestamp_ns("-1.0"));
+  EXPECT_EQ(format_seconds(1305031102175304000LL), "1305031102.175304");
+}
+
+TEST(TumSequence, BundledFramesAssociateWithin20ms) {
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  ASSERT_EQ(seq.frames.size(), 40u);
+  int shared_depth = 0;
+  for (size_t i = 0; i < seq.frames.size(); ++i) {
+    const auto& f = seq.frames[i];
+    ASSERT_TRUE(f.t_depth_ns.has_value());
+    EXPECT_LE(std::llabs(*f.t_depth_ns - f.t_colour_ns), 20'000'000);
+    if (i > 0 && f.depth_path == seq.frames[i - 1].depth_path) ++shared_depth;
+  }
+  EXPECT_EQ(shared_depth, 7);  // see test/data/fr1_xyz/README.md
+  EXPECT_FALSE(seq.groundtruth.empty());
+}
+
+TEST(TumSequence, LoadsFrameInMetres) {
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  const RgbdFrame f = load_tum_frame(seq.frames[0], 5000, 640, 480);
+  ASSERT_EQ(f.status, Status::Ok) << f.problem;
+  EXPECT_EQ(f.gray.type(), CV_8UC1);
+  EXPECT_EQ(f.depth_m.type(), CV_32FC1);
+  double lo, hi;
+  cv::minMaxLoc(f.depth_m, &lo, &hi);
+  EXPECT_EQ(lo, 0.0);                  // holes stay 0
+  EXPECT_NEAR(hi, 18587 / 5000.0, 1e-5);  // README.txt: first frame's max raw value
+}
+
+TEST(GroundTruth, InterpolatesBetweenSamplesAndRefusesGaps) {
+  StampedPose a, b, c;
+  a.t_ns = 0;
+  b.t_ns = 10'000'000;
+  b.pose.translation() = Eigen::Vector3d(1, 0, 0);
+  b.pose.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  c.t_ns = 1'000'000'000;
+  const GroundTruth gt({a, b, c});
+  const auto mid = gt.at(5'000'000);
+  ASSERT_TRUE(mid);
+  EXPECT_NEAR(mid->translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(mid->linear()).angle(), 0.1, 1e-12);
+  EXPECT_FALSE(gt.at(500'000'000));  // inside a 0.99 s gap
+  EXPECT_FALSE(gt.at(-1));
+}
+
+class BrokenSequence : public ::testing::Test {
+ protected:
+  fs::path dir = fs::temp_directory_path() / ("rgbdo_tum_" + std::to_string(::getpid()));
+  void SetUp() override { fs::create_directories(dir); }
+  void TearDown() override { fs::remove_all(dir); }
+  void write(const std::string& name, const std::string& text) { std::ofstream(dir / name) << text; }
+};
+
+TEST_F(BrokenSequence, MissingIndexNamesTheFile) {
+  write("rgb.txt", "1.0 rgb/a.png\n");
+  try {
+    open_tum_sequence(dir.string());
+    FAIL();
+  } catch (const SourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("depth.txt"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(BrokenSequence, MalformedLineNamesFileAndLine) {
+  write("rgb.txt", "# header\n1.0 rgb/a.png\nabc rgb/b.png\n");
+  write("depth.txt", "1.0 depth/a.png\n");
+  try {
+    open_tum_sequence(dir.string());
+    FAIL();
+  } catch (const SourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("rgb.txt:3"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(BrokenSequence, CorruptWrongSizeAndMissingDepthAreFlaggedNotThrown) {
+  fs::create_directories(dir / "rgb");
+  fs::create_directories(dir / "depth");
+  write("rgb/corrupt.png", "not a png at all");
+  cv::imwrite((dir / "rgb/small.png").string(), cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)));
+  cv::imwrite((dir / "rgb/ok.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(1, 2, 3)));
+  cv::imwrite((dir / "depth/d8.png").string(), cv::Mat(480, 640, CV_8UC1, cv::Scalar(9)));
+  write("rgb.txt", "1.00 rgb/corrupt.png\n1.10 rgb/small.png\n1.20 rgb/ok.png\n2.00 rgb/ok.png\n");
+  write("depth.txt", "1.00 depth/d8.png\n1.10 depth/d8.png\n1.20 depth/d8.png\n");
+  const TumSequence seq = open_tum_sequence(dir.string());
+  ASSERT_EQ(seq.frames.size(), 4u);
+  const auto corrupt = load_tum_frame(seq.frames[0], 5000, 640, 480);
+  EXPECT_EQ(corrupt.status, Status::BadFrame);
+  EXPECT_NE(corrupt.problem.find("corrupt.png"), std::string::npos);
+  const auto small = load_tum_frame(seq.frames[1], 5000, 640, 480);
+  EXPECT_EQ(small.status, Status::BadFrame);
+  EXPECT_NE(small.problem.find("10x10"), std::string::npos);
+  const auto eight_bit_depth = load_tum_frame(seq.frames[2], 5000, 640, 480);
+  EXPECT_EQ(eight_bit_depth.status, Status::BadFrame);
+  EXPECT_NE(eight_bit_depth.problem.find("16-bit"), std::string::npos);
+  EXPECT_FALSE(seq.frames[3].t_depth_ns.has_value());  // 0.8 s from any depth frame
+  EXPECT_EQ(load_tum_frame(seq.frames[3], 5000, 640, 480).status, Status::NoDepth);
+}
+
+}  // namespace
+}  // namespace rgbdo
