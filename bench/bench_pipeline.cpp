@@ -1,0 +1,170 @@
+// Per-stage and whole-pipeline throughput on real frames (the bundled TUM fr1_xyz frames),
+// one thread, PNG decoding excluded. Each stage sits beside the obvious alternative where
+// one exists, so a ratio is read from one run.
+#include <benchmark/benchmark.h>
+
+#include <opencv2/core/utility.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "rgbd_odometry/mask.hpp"
+#include "rgbd_odometry/odometry.hpp"
+#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/umeyama.hpp"
+
+namespace rgbdo {
+namespace {
+
+constexpr int kFrames = 16;
+
+struct Fixture {
+  Config config;
+  std::vector<RgbdFrame> frames;           // decoded once, outside any timing
+  std::vector<ProcessedFrame> processed;   // features + geometry per frame
+  std::vector<Match> matches;              // of frames 0 -> 1
+  PointPairs pairs;                        // of frames 0 -> 1
+  std::vector<Eigen::Vector3d> inlier_prev, inlier_curr;
+  Eigen::Isometry3d motion;
+
+  Fixture() : config(load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml")) {
+    cv::setNumThreads(1);
+    const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+    OdometryPipeline pipeline(config);
+    for (int i = 0; i < kFrames; ++i) {
+      frames.push_back(load_tum_frame(seq.frames[static_cast<size_t>(i)], config.depth.units_per_m, 640, 480));
+      processed.emplace_back();
+      pipeline.extract(frames.back(), processed.back());
+    }
+    SymmetricMatcher(config.matching.ratio).match(processed[0].features.descriptors, processed[1].features.descriptors, matches);
+    build_point_pairs(matches, processed[0].geometry, processed[0].times, processed[1].geometry, processed[1].times,
+                      nullptr, pairs);
+    RigidRansac ransac(config.ransac, SensorNoise{});
+    std::mt19937_64 rng(1);
+    const RansacResult r = ransac.estimate(pairs.prev, pairs.curr, rng);
+    motion = r.T_prev_curr;
+    for (int k : r.inliers) {
+      inlier_prev.push_back(pairs.prev[static_cast<size_t>(k)]);
+      inlier_curr.push_back(pairs.curr[static_cast<size_t>(k)]);
+    }
+  }
+};
+
+const Fixture& fixture() {
+  static const Fixture f;
+  return f;
+}
+
+void BM_Detect(benchmark::State& state) {
+  const auto& f = fixture();
+  OdometryPipeline pipeline(f.config);
+  ProcessedFrame out;
+  size_t i = 0;
+  for (auto _ : state) {
+    pipeline.extract(f.frames[i++ % f.frames.size()], out);
+    benchmark::DoNotOptimize(out.features.keypoints.data());
+  }
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Detect)->Unit(benchmark::kMillisecond);
+
+void set_pair_rate(benchmark::State& state, const cv::Mat& a, const cv::Mat& b) {
+  state.counters["descriptor_pairs/s"] = benchmark::Counter(static_cast<double>(state.iterations()) * a.rows * b.rows,
+                                                            benchmark::Counter::kIsRate);
+}
+
+void BM_Match_Symmetric(benchmark::State& state) {
+  const auto& f = fixture();
+  const cv::Mat& a = f.processed[0].features.descriptors;
+  const cv::Mat& b = f.processed[1].features.descriptors;
+  SymmetricMatcher matcher(f.config.matching.ratio);
+  std::vector<Match> out;
+  for (auto _ : state) {
+    matcher.match(a, b, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  set_pair_rate(state, a, b);
+}
+BENCHMARK(BM_Match_Symmetric)->Unit(benchmark::kMillisecond);
+
+// The obvious alternative: OpenCV brute force, k = 2 in each direction, then the same test.
+void BM_Match_BFMatcherKnn2x(benchmark::State& state) {
+  const auto& f = fixture();
+  const cv::Mat& a = f.processed[0].features.descriptors;
+  const cv::Mat& b = f.processed[1].features.descriptors;
+  cv::BFMatcher bf(cv::NORM_HAMMING);
+  std::vector<std::vector<cv::DMatch>> ab, ba;
+  for (auto _ : state) {
+    bf.knnMatch(a, b, ab, 2);
+    bf.knnMatch(b, a, ba, 2);
+    int kept = 0;
+    for (const auto& m : ab) {
+      if (m.size() < 2 || m[0].distance >= 0.8f * m[1].distance) continue;
+      const auto& r = ba[static_cast<size_t>(m[0].trainIdx)];
+      kept += r.size() == 2 && r[0].trainIdx == m[0].queryIdx && r[0].distance < 0.8f * r[1].distance;
+    }
+    benchmark::DoNotOptimize(kept);
+  }
+  set_pair_rate(state, a, b);
+}
+BENCHMARK(BM_Match_BFMatcherKnn2x)->Unit(benchmark::kMillisecond);
+
+void BM_BackProject(benchmark::State& state) {
+  const auto& f = fixture();
+  KeypointBackProjector bp(f.config.camera, f.config.depth);
+  KeypointGeometry g;
+  PointPairs pairs;
+  const MotionPrior prior;
+  for (auto _ : state) {
+    bp.compute(f.processed[1].features.keypoints, f.frames[1].depth_m, g);
+    build_point_pairs(f.matches, f.processed[0].geometry, f.processed[0].times, g, f.processed[1].times, &prior, pairs);
+    benchmark::DoNotOptimize(pairs.prev.data());
+  }
+}
+BENCHMARK(BM_BackProject)->Unit(benchmark::kMicrosecond);
+
+void BM_Ransac(benchmark::State& state) {
+  const auto& f = fixture();
+  RigidRansac ransac(f.config.ransac, SensorNoise{});
+  std::uint64_t seed = 0;
+  int hypotheses = 0;
+  for (auto _ : state) {
+    std::mt19937_64 rng(seed++);
+    const auto r = ransac.estimate(f.pairs.prev, f.pairs.curr, rng);
+    hypotheses += r.hypotheses;
+  }
+  state.counters["pairs"] = static_cast<double>(f.pairs.size());
+  state.counters["hypotheses/s"] = benchmark::Counter(hypotheses, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Ransac)->Unit(benchmark::kMicrosecond);
+
+void BM_Covariance(benchmark::State& state) {
+  const auto& f = fixture();
+  PerturbationCovariance cov(f.config.covariance);
+  Matrix6d c;
+  std::uint64_t seed = 0;
+  for (auto _ : state) {
+    std::mt19937_64 rng(seed++);
+    benchmark::DoNotOptimize(cov.estimate(f.inlier_prev, f.inlier_curr, f.motion, rng, c));
+  }
+  state.counters["inliers"] = static_cast<double>(f.inlier_prev.size());
+}
+BENCHMARK(BM_Covariance)->Unit(benchmark::kMillisecond);
+
+// Whole per-frame pipeline: every stage for one new frame against its predecessor.
+void BM_Pipeline(benchmark::State& state) {
+  const auto& f = fixture();
+  OdometryPipeline pipeline(f.config);
+  size_t i = 0;
+  int failed = 0;
+  for (auto _ : state) {
+    const auto r = pipeline.process(f.frames[i++ % f.frames.size()]);
+    failed += r && r->status != Status::Ok;
+  }
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["failed"] = failed;
+}
+BENCHMARK(BM_Pipeline)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace rgbdo
+
+BENCHMARK_MAIN();

@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# One command from a fresh Debian bookworm machine: installs every build dependency from
+# Debian's packages (skipped when already installed), builds, and runs the chosen job.
+#
+#   deploy/setup.sh demo    build, then replay the bundled fr1_xyz frames (the main job)
+#   deploy/setup.sh test    build, then run the whole test suite natively and again under
+#                           AddressSanitizer + UndefinedBehaviorSanitizer
+#   deploy/setup.sh bench   build, then run the Google Benchmark programs
+#   deploy/setup.sh deps    only install the dependencies
+#
+# Idempotent: re-running it re-uses the build directories under build/.
+set -euo pipefail
+
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$repo"
+jobs=${JOBS:-$(nproc)}
+
+packages=(
+  build-essential cmake pkg-config
+  libopencv-dev libeigen3-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+log() { printf '\n== %s\n' "$*"; }
+
+install_dependencies() {
+  local missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -eq 0 ]; then
+    log "dependencies: all ${#packages[@]} Debian packages present"
+    return
+  fi
+  log "installing from Debian: ${missing[*]}"
+  local sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "setup.sh: not root and no sudo: cannot install ${missing[*]}" >&2; exit 1; }
+    sudo=sudo
+  fi
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+# build DIR [cmake options...]
+build() {
+  local dir=$1
+  shift
+  log "building $dir"
+  cmake -S . -B "$dir" -DRGBDO_WERROR=ON "$@" >/dev/null
+  cmake --build "$dir" -j "$jobs"
+}
+
+run_demo() {
+  build build/release -DCMAKE_BUILD_TYPE=Release
+  mkdir -p build/demo
+  log "replaying the bundled frames (test/data/fr1_xyz, TUM RGB-D fr1_xyz, CC BY 4.0)"
+  build/release/rgbd-odometry --source tum:test/data/fr1_xyz --config deploy/config/tum-fr1.yaml \
+    --log build/demo/odometry.csv --trajectory build/demo/trajectory.txt
+  log "odometry log: build/demo/odometry.csv   trajectory: build/demo/trajectory.txt"
+}
+
+run_tests() {
+  build build/release -DCMAKE_BUILD_TYPE=Release
+  log "test suite, native release build"
+  (cd build/release && ctest --output-on-failure -j "$jobs")
+  # Sanitised build: memory errors and undefined behaviour must never land.
+  build build/sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE=ON -DRGBDO_BUILD_BENCHMARKS=OFF
+  log "test suite, AddressSanitizer + UndefinedBehaviorSanitizer"
+  (cd build/sanitize &&
+    ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" ctest --output-on-failure -j "$jobs")
+}
+
+run_benchmarks() {
+  build build/release -DCMAKE_BUILD_TYPE=Release
+  log "benchmarks (one thread, PNG decoding excluded)"
+  for b in build/release/bench/bench_*; do "$b" --benchmark_counters_tabular=true; done
+}
+
+job=${1:-}
+case "$job" in
+  deps) install_dependencies ;;
+  demo) install_dependencies; run_demo ;;
+  test) install_dependencies; run_tests ;;
+  bench) install_dependencies; run_benchmarks ;;
+  *) echo "usage: deploy/setup.sh demo|test|bench|deps" >&2; exit 2 ;;
+esac
