@@ -13,6 +13,7 @@ constexpr int kMaxRefinements = 20;
 constexpr double kSuccessProbability = 0.999;  // adaptive stop once a clean sample is this likely
 constexpr double kMinSampleSide_m = 0.02;      // shorter triangle sides barely constrain rotation
 constexpr double kMinSampleSine = 0.1;         // ~6 degrees: flatter triangles are near-collinear
+constexpr double kMaxRefinementRotation_rad = 0.05;
 
 }  // namespace
 
@@ -168,7 +169,15 @@ RansacResult RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const
     threshold = std::min(3 * sigma, config_.inlier_threshold_m);
   }
   result.threshold_m = threshold;
-  if (inliers.size() >= 3) result.T_prev_curr = fit_anisotropic(prev, curr, inliers, result.T_prev_curr);
+  if (inliers.size() >= 3) {
+    const Eigen::Isometry3d refined = fit_anisotropic(prev, curr, inliers, result.T_prev_curr);
+    // The refinement corrects the least-squares fit by noise-level amounts. A jump of more
+    // than the inlier threshold means a near-degenerate geometry: keep the plain fit.
+    const Eigen::Isometry3d change = result.T_prev_curr.inverse() * refined;
+    if (refined.matrix().allFinite() && change.translation().norm() < config_.inlier_threshold_m &&
+        Eigen::AngleAxisd(change.linear()).angle() < kMaxRefinementRotation_rad)
+      result.T_prev_curr = refined;
+  }
   result.status = static_cast<int>(inliers.size()) >= config_.min_inliers ? Status::Ok : Status::RansacFailed;
   return result;
 }

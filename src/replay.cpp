@@ -45,7 +45,7 @@ std::string pair_line(const PairResult& r, size_t index, bool verbose) {
 }
 
 void print_stats(std::ostream& out, const char* name, const ErrorStats& s, double factor, const char* unit) {
-  out << "  " << std::left << std::setw(34) << name << std::right << std::fixed << std::setprecision(3) << "RMSE "
+  out << "  " << std::left << std::setw(38) << name << std::right << std::fixed << std::setprecision(3) << "RMSE "
       << s.rmse * factor << "  median " << s.median * factor << "  max " << s.max * factor << " " << unit << "  ("
       << s.count << ")\n";
 }
