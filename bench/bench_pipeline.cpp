@@ -38,7 +38,7 @@ struct Fixture {
     build_point_pairs(matches, processed[0].geometry, processed[0].times, processed[1].geometry, processed[1].times,
                       nullptr, pairs);
     RigidRansac ransac(config.ransac, SensorNoise{});
-    std::mt19937_64 rng(1);
+    Rng rng(1);
     const RansacResult r = ransac.estimate(pairs.prev, pairs.curr, rng);
     motion = r.T_prev_curr;
     for (int k : r.inliers) {
@@ -127,7 +127,7 @@ void BM_Ransac(benchmark::State& state) {
   std::uint64_t seed = 0;
   int hypotheses = 0;
   for (auto _ : state) {
-    std::mt19937_64 rng(seed++);
+    Rng rng(seed++);
     const auto r = ransac.estimate(f.pairs.prev, f.pairs.curr, rng);
     hypotheses += r.hypotheses;
   }
@@ -142,7 +142,7 @@ void BM_Covariance(benchmark::State& state) {
   Matrix6d c;
   std::uint64_t seed = 0;
   for (auto _ : state) {
-    std::mt19937_64 rng(seed++);
+    Rng rng(seed++);
     benchmark::DoNotOptimize(cov.estimate(f.inlier_prev, f.inlier_curr, f.motion, rng, c));
   }
   state.counters["inliers"] = static_cast<double>(f.inlier_prev.size());

@@ -28,7 +28,7 @@ double PerturbationCovariance::variance_factor(const std::vector<Eigen::Vector3d
 }
 
 bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                      const Eigen::Isometry3d& T_prev_curr, std::mt19937_64& rng,
+                                      const Eigen::Isometry3d& T_prev_curr, Rng& rng,
                                       Matrix6d& covariance) {
   const size_t n = prev.size();
   const double c = config_.depth_noise_coeff;
@@ -43,11 +43,13 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
   noisy_prev_.resize(n);
   noisy_curr_.resize(n);
   samples_.clear();
-  std::normal_distribution<double> gauss(0.0, 1.0);
   for (int s = 0; s < config_.perturbations; ++s) {
     for (size_t k = 0; k < n; ++k) {
-      noisy_prev_[k] = prev[k] + sigma_prev_[k].cwiseProduct(Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)));
-      noisy_curr_[k] = curr[k] + sigma_curr_[k].cwiseProduct(Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)));
+      // Named draws: the order of the three normals must not depend on evaluation order.
+      const double a = rng.gaussian(), b = rng.gaussian(), c3 = rng.gaussian();
+      noisy_prev_[k] = prev[k] + sigma_prev_[k].cwiseProduct(Eigen::Vector3d(a, b, c3));
+      const double d = rng.gaussian(), e = rng.gaussian(), f = rng.gaussian();
+      noisy_curr_[k] = curr[k] + sigma_curr_[k].cwiseProduct(Eigen::Vector3d(d, e, f));
     }
     Eigen::Isometry3d T;
     if (!fit_rigid(noisy_curr_, noisy_prev_, weights_, T)) return false;

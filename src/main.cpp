@@ -4,12 +4,24 @@
 
 #include "rgbd_odometry/config.hpp"
 #include "rgbd_odometry/replay.hpp"
+#include "kernels.hpp"
 #include "rgbd_odometry/version.hpp"
 
 int main(int argc, char** argv) {
   rgbdo::RunOptions options;
   CLI::App app{"rgbd-odometry: frame-to-frame RGB-D odometry with a 6x6 covariance per pair"};
   app.set_version_flag("--version", std::string("rgbd-odometry ") + rgbdo::kVersion);
+  app.add_flag_callback(
+      "--print-kernels",
+      [] {
+        std::cout << "build: " << rgbdo::simd::build_architecture() << "\ncompiled kernel sets:";
+        for (const auto& s : rgbdo::simd::compiled_kernel_sets())
+          std::cout << " " << s.name << (rgbdo::simd::cpu_supports(s) ? "" : " (unsupported by this CPU)");
+        std::cout << "\nactive: " << rgbdo::simd::active_kernels().name
+                  << (rgbdo::simd::scalar_forced() ? " (forced by RGBDO_FORCE_SCALAR)" : "") << "\n";
+        throw CLI::Success();
+      },
+      "list the SIMD kernel sets in this build and the one in use, then exit");
   app.add_option("--source", options.source, "frame source URI: tum:DIR (a TUM RGB-D sequence)")->required();
   app.add_option("--config", options.config_path, "YAML configuration (e.g. deploy/config/tum-fr1.yaml)")
       ->check(CLI::ExistingFile);

@@ -57,7 +57,7 @@ void SymmetricMatcher::match(const cv::Mat& prev, const cv::Mat& curr, std::vect
   curr_nn_.resize(static_cast<size_t>(curr.rows));
   const bool binary = prev.type() == CV_8UC1;
   if (binary) {
-    simd::nearest_two_hamming_scalar(prev.data, prev.rows, prev.step, curr.data, curr.rows, curr.step, prev.cols,
+    hamming_(prev.data, prev.rows, prev.step, curr.data, curr.rows, curr.step, prev.cols,
                                      prev_nn_.data(), curr_nn_.data());
   } else {
     CV_Assert(prev.type() == CV_32FC1);

@@ -103,9 +103,11 @@ PairResult OdometryPipeline::estimate(const ProcessedFrame& prev, const Processe
   r.times.backproject_ms = ms_since(t0);
   if (r.point_pairs < config_.ransac.min_inliers) return fail(Status::TooFewMatches);
 
-  std::mt19937_64 rng(mix(config_.seed, pair_index));
+  // Separate streams: the covariance's noise must not depend on how many draws RANSAC used.
+  Rng ransac_rng(mix(config_.seed, 2 * pair_index));
+  Rng covariance_rng(mix(config_.seed, 2 * pair_index + 1));
   t0 = Clock::now();
-  RansacResult fit = ransac_.estimate(pairs_.prev, pairs_.curr, rng);
+  RansacResult fit = ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng);
   r.times.ransac_ms = ms_since(t0);
   if (fit.status != Status::Ok) return fail(fit.status);
 
@@ -133,7 +135,7 @@ PairResult OdometryPipeline::estimate(const ProcessedFrame& prev, const Processe
   }
   t0 = Clock::now();
   Matrix6d cov;
-  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit.T_prev_curr, rng, cov);
+  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit.T_prev_curr, covariance_rng, cov);
   r.times.covariance_ms = ms_since(t0);
   if (!cov_ok) return fail(Status::CovarianceFailed);
 

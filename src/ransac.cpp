@@ -74,12 +74,11 @@ bool RigidRansac::sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev,
 }
 
 RansacResult RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                   std::mt19937_64& rng) {
+                                   Rng& rng) {
   RansacResult result;
   const int n = static_cast<int>(prev.size());
   if (n < std::max(3, config_.min_inliers)) return result;
 
-  std::uniform_int_distribution<int> pick(0, n - 1);
   const double threshold_sq = config_.inlier_threshold_m * config_.inlier_threshold_m;
   int best_count = -1;
   double best_cost = 0;
@@ -88,7 +87,8 @@ RansacResult RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, con
   // Degenerate draws are cheap and do not count as hypotheses, but are bounded too.
   const int max_draws = 10 * config_.max_iterations;
   for (int draw = 0; draw < max_draws && result.hypotheses < needed; ++draw) {
-    int idx[3] = {pick(rng), pick(rng), pick(rng)};
+    const auto un = static_cast<std::uint32_t>(n);
+    const int idx[3] = {static_cast<int>(rng.below(un)), static_cast<int>(rng.below(un)), static_cast<int>(rng.below(un))};
     if (idx[0] == idx[1] || idx[0] == idx[2] || idx[1] == idx[2]) continue;
     if (sample_is_degenerate(prev, curr, idx)) continue;
     const Eigen::Vector3d s[3] = {curr[static_cast<size_t>(idx[0])], curr[static_cast<size_t>(idx[1])],

@@ -2,8 +2,9 @@
 # exit 0, one log row per colour-frame pair in the documented format, one trajectory line
 # per frame, and the accuracy summary.
 file(MAKE_DIRECTORY ${OUT})
+string(REPLACE "|" ";" EMULATOR "${EMULATOR}")
 execute_process(
-  COMMAND ${EXE} --source ${SOURCE} --config ${CONFIG} --log ${OUT}/odometry.csv --trajectory ${OUT}/trajectory.txt
+  COMMAND ${EMULATOR} ${EXE} --source ${SOURCE} --config ${CONFIG} --log ${OUT}/odometry.csv --trajectory ${OUT}/trajectory.txt
   RESULT_VARIABLE rc OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "rgbd-odometry exited ${rc}: ${stderr}")

@@ -29,8 +29,8 @@ CovarianceConfig paper_config(int perturbations) {
 // noisy realisation), fit each, and take the spread of the fitted motions.
 Matrix6d monte_carlo_covariance(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                                 int trials) {
-  std::mt19937_64 rng(12345);
-  std::normal_distribution<double> g(0, 1);
+  Rng rng(12345);
+  const auto g = [](Rng& r) { return r.gaussian(); };
   std::vector<double> w;
   for (size_t k = 0; k < prev.size(); ++k) w.push_back(pair_weight(prev[k], curr[k], 1.425e-3));
   std::vector<Vector6d> xs;
@@ -62,7 +62,7 @@ TEST(PerturbationCovariance, AgreesWithIndependentMonteCarlo) {
   for (const auto& c : curr) prev.push_back(T * c);
   // WHEN the pipeline's perturbation covariance uses many perturbations
   PerturbationCovariance pc(paper_config(4000));
-  std::mt19937_64 rng(7);
+  Rng rng(7);
   Matrix6d cov;
   ASSERT_TRUE(pc.estimate(prev, curr, T, rng, cov));
   const Matrix6d mc = monte_carlo_covariance(prev, curr, 4000);
@@ -89,7 +89,7 @@ TEST(PerturbationCovariance, TranslationVarianceFollowsTheNoiseModelAnalytically
   const double sigma_z = 1.425e-3 * 4.0;
   const double expected = 2 * sigma_z * sigma_z * sw2 / (sw * sw);
   PerturbationCovariance pc(paper_config(3000));
-  std::mt19937_64 rng(3);
+  Rng rng(3);
   Matrix6d cov;
   ASSERT_TRUE(pc.estimate(pts, pts, Eigen::Isometry3d::Identity(), rng, cov));
   EXPECT_NEAR(cov(2, 2) / expected, 1.0, 0.1);  // 3000 draws: ~2.6 % sampling error
@@ -101,7 +101,7 @@ TEST(PerturbationCovariance, ResultIsSymmetricPositiveDefiniteAndScaled) {
   PerturbationCovariance unscaled(config);
   config.scale = 9.0;
   PerturbationCovariance scaled(config);
-  std::mt19937_64 r1(5), r2(5);
+  Rng r1(5), r2(5);
   Matrix6d a, b;
   ASSERT_TRUE(unscaled.estimate(curr, curr, Eigen::Isometry3d::Identity(), r1, a));
   ASSERT_TRUE(scaled.estimate(curr, curr, Eigen::Isometry3d::Identity(), r2, b));

@@ -42,7 +42,7 @@ TEST(Ransac, RecoversKnownMotionWithHalfTheMatchesWrong) {
   const Eigen::Isometry3d truth = transform_from_xi(xi);
   const Scene s = make_scene(truth, 400, 0.5, 0.002, 7);
   RigidRansac ransac(paper_config(), SensorNoise{});
-  std::mt19937_64 rng(1);
+  Rng rng(1);
   const RansacResult r = ransac.estimate(s.prev, s.curr, rng);
   ASSERT_EQ(r.status, Status::Ok);
   const Eigen::Isometry3d err = truth.inverse() * r.T_prev_curr;
@@ -82,7 +82,7 @@ TEST(Ransac, RayAlignedNoiseIsBetterFitAnisotropically) {
     }
     // WHEN fitted by RANSAC + refinement, and by one plain least-squares fit
     RigidRansac ransac(paper_config(), noise);
-    std::mt19937_64 r(seed);
+    Rng r(seed);
     const RansacResult fit = ransac.estimate(prev, curr, r);
     ASSERT_EQ(fit.status, Status::Ok);
     Eigen::Isometry3d plain;
@@ -97,7 +97,7 @@ TEST(Ransac, RayAlignedNoiseIsBetterFitAnisotropically) {
 TEST(Ransac, SameSeedSameAnswer) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 200, 0.4, 0.003, 9);
   RigidRansac a(paper_config(), SensorNoise{}), b(paper_config(), SensorNoise{});
-  std::mt19937_64 ra(42), rb(42);
+  Rng ra(42), rb(42);
   const auto x = a.estimate(s.prev, s.curr, ra), y = b.estimate(s.prev, s.curr, rb);
   EXPECT_EQ(x.inliers, y.inliers);
   EXPECT_TRUE(x.T_prev_curr.isApprox(y.T_prev_curr, 0));
@@ -107,21 +107,21 @@ TEST(Ransac, AllPointsOnALineIsDegenerate) {
   std::vector<Eigen::Vector3d> line;
   for (int i = 0; i < 50; ++i) line.emplace_back(0.05 * i, 0.02 * i, 1.0 + 0.01 * i);
   RigidRansac ransac(paper_config(), SensorNoise{});
-  std::mt19937_64 rng(1);
+  Rng rng(1);
   EXPECT_EQ(ransac.estimate(line, line, rng).status, Status::DegenerateSample);
 }
 
 TEST(Ransac, PureNoiseHasTooFewInliers) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 100, 1.0, 0.0, 11);
   RigidRansac ransac(paper_config(), SensorNoise{});
-  std::mt19937_64 rng(1);
+  Rng rng(1);
   EXPECT_NE(ransac.estimate(s.prev, s.curr, rng).status, Status::Ok);
 }
 
 TEST(Ransac, FewerPairsThanMinimumFails) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 5, 0.0, 0.0, 13);
   RigidRansac ransac(paper_config(), SensorNoise{});
-  std::mt19937_64 rng(1);
+  Rng rng(1);
   EXPECT_EQ(ransac.estimate(s.prev, s.curr, rng).status, Status::RansacFailed);
 }
 

@@ -3,7 +3,11 @@
 set(CMAKE_SYSTEM_NAME Linux)
 set(CMAKE_SYSTEM_PROCESSOR armv7l)
 
-set(RGBDO_SYSROOT "$ENV{RGBDO_SYSROOT}" CACHE PATH "armhf sysroot (Debian bookworm armhf)")
+if(NOT RGBDO_SYSROOT)
+  set(RGBDO_SYSROOT "$ENV{RGBDO_SYSROOT}")
+endif()
+# try_compile re-reads this file in a fresh project: hand the sysroot on to it.
+list(APPEND CMAKE_TRY_COMPILE_PLATFORM_VARIABLES RGBDO_SYSROOT)
 if(NOT RGBDO_SYSROOT)
   message(FATAL_ERROR "armhf toolchain: set RGBDO_SYSROOT to an armhf sysroot")
 endif()

@@ -11,11 +11,11 @@
 // the least-squares estimate of how much noisier this pair's points are than modelled:
 // a pair with sloppy inliers then reports a proportionally larger covariance.
 #include <Eigen/Geometry>
-#include <random>
 #include <vector>
 
 #include "rgbd_odometry/config.hpp"
 #include "rgbd_odometry/geometry.hpp"
+#include "rgbd_odometry/rng.hpp"
 
 namespace rgbdo {
 
@@ -26,7 +26,7 @@ class PerturbationCovariance {
   // prev[k] ~ T curr[k] (the inliers and the fitted motion); returns false when the result
   // is not finite, symmetric and positive definite.
   [[nodiscard]] bool estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                              const Eigen::Isometry3d& T_prev_curr, std::mt19937_64& rng, Matrix6d& covariance);
+                              const Eigen::Isometry3d& T_prev_curr, Rng& rng, Matrix6d& covariance);
 
   // s0^2 of the fit (>= 1), as described above.
   static double variance_factor(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,

@@ -5,7 +5,7 @@
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
-#include "nearest_two.hpp"
+#include "kernels.hpp"
 
 namespace rgbdo {
 
@@ -21,12 +21,17 @@ bool passes_ratio_test(const simd::NearestTwo& n, double ratio);
 
 class SymmetricMatcher {
  public:
-  explicit SymmetricMatcher(double ratio) : ratio_(ratio) {}
+  // Binds the active Hamming kernel (simd/kernels.hpp) once, here.
+  explicit SymmetricMatcher(double ratio)
+      : ratio_(ratio), hamming_(simd::active_kernels().nearest_two_hamming), kernel_name_(simd::active_kernels().name) {}
+  const char* kernel_name() const { return kernel_name_; }
   // Descriptors: CV_8U rows (Hamming) or CV_32F rows (L2). `out` is overwritten.
   void match(const cv::Mat& prev, const cv::Mat& curr, std::vector<Match>& out);
 
  private:
   double ratio_;
+  simd::NearestTwoHammingFn hamming_;
+  const char* kernel_name_;
   std::vector<simd::NearestTwo> prev_nn_, curr_nn_;  // kept across frames: no per-frame allocation
 };
 

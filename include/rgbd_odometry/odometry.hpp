@@ -4,7 +4,6 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
-#include <random>
 
 #include "rgbd_odometry/backproject.hpp"
 #include "rgbd_odometry/config.hpp"

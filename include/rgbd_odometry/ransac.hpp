@@ -7,11 +7,11 @@
 // (noise_model.hpp): depth errors along the viewing ray are cheap, lateral ones are not.
 #include <Eigen/Geometry>
 #include <cstdint>
-#include <random>
 #include <vector>
 
 #include "rgbd_odometry/config.hpp"
 #include "rgbd_odometry/noise_model.hpp"
+#include "rgbd_odometry/rng.hpp"
 #include "rgbd_odometry/status.hpp"
 
 namespace rgbdo {
@@ -30,7 +30,7 @@ class RigidRansac {
 
   // prev[k] ~ T * curr[k] for inliers k.
   [[nodiscard]] RansacResult estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                      std::mt19937_64& rng);
+                                      Rng& rng);
 
   // The refinement alone, from a given motion (used again after the points were corrected).
   [[nodiscard]] RansacResult refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
