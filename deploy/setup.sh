@@ -3,7 +3,8 @@
 # Debian's packages (skipped when already installed), builds, and runs the chosen job.
 #
 #   deploy/setup.sh demo    build, then replay the bundled fr1_xyz frames (the main job)
-#   deploy/setup.sh test    build, then run the whole test suite natively and again under
+#   deploy/setup.sh test    build for x86-64 and armhf (Odroid-XU3), run the whole test suite
+#                           natively, on armhf under qemu, and natively again under
 #                           AddressSanitizer + UndefinedBehaviorSanitizer
 #   deploy/setup.sh bench   build, then run the Google Benchmark programs
 #   deploy/setup.sh deps    only install the dependencies
@@ -20,16 +21,18 @@ packages=(
   libopencv-dev libeigen3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
+# The armhf cross build, its sysroot and emulator, and systemd-analyze for the package test.
+cross_packages=(g++-arm-linux-gnueabihf mmdebstrap qemu-user-static systemd)
 
 log() { printf '\n== %s\n' "$*"; }
 
 install_dependencies() {
   local missing=()
-  for p in "${packages[@]}"; do
+  for p in "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if [ ${#missing[@]} -eq 0 ]; then
-    log "dependencies: all ${#packages[@]} Debian packages present"
+    log "dependencies: all $# Debian packages present"
     return
   fi
   log "installing from Debian: ${missing[*]}"
@@ -61,9 +64,16 @@ run_demo() {
 }
 
 run_tests() {
-  build build/release -DCMAKE_BUILD_TYPE=Release
-  log "test suite, native release build"
+  deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
+  build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
+  # The native build also compares its replay with the armhf binary's (cross_arch_replay_matches).
+  build build/release -DCMAKE_BUILD_TYPE=Release -DRGBDO_ARMHF_BUILD_DIR="$repo/build/armhf" \
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
+  log "test suite, native release build (x86-64)"
   (cd build/release && ctest --output-on-failure -j "$jobs")
+  log "test suite, armhf build under qemu-arm-static"
+  (cd build/armhf && ctest --output-on-failure -j "$jobs")
   # Sanitised build: memory errors and undefined behaviour must never land.
   build build/sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE=ON -DRGBDO_BUILD_BENCHMARKS=OFF
   log "test suite, AddressSanitizer + UndefinedBehaviorSanitizer"
@@ -80,9 +90,9 @@ run_benchmarks() {
 
 job=${1:-}
 case "$job" in
-  deps) install_dependencies ;;
-  demo) install_dependencies; run_demo ;;
-  test) install_dependencies; run_tests ;;
-  bench) install_dependencies; run_benchmarks ;;
+  deps) install_dependencies "${packages[@]}" "${cross_packages[@]}" ;;
+  demo) install_dependencies "${packages[@]}"; run_demo ;;
+  test) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_tests ;;
+  bench) install_dependencies "${packages[@]}"; run_benchmarks ;;
   *) echo "usage: deploy/setup.sh demo|test|bench|deps" >&2; exit 2 ;;
 esac
