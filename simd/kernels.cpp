@@ -3,10 +3,22 @@
 #include <cstdlib>
 #include <string_view>
 
+#if defined(__arm__) || defined(__aarch64__)
+#include <sys/auxv.h>
+#endif
+
 namespace rgbdo::simd {
 namespace {
 
+// Best first; the scalar reference always last.
 constexpr KernelSet kSets[] = {
+#if defined(RGBDO_X86_KERNELS)
+    {"avx2", nearest_two_hamming_avx2},
+    {"sse4.2-popcnt", nearest_two_hamming_popcnt},
+#endif
+#if defined(RGBDO_NEON_KERNELS)
+    {"neon", nearest_two_hamming_neon},
+#endif
     {"scalar", nearest_two_hamming_scalar},
 };
 
@@ -14,7 +26,22 @@ constexpr KernelSet kSets[] = {
 
 std::span<const KernelSet> compiled_kernel_sets() { return kSets; }
 
-bool cpu_supports(const KernelSet& set) { return std::string_view(set.name) == "scalar"; }
+bool cpu_supports(const KernelSet& set) {
+  const std::string_view name = set.name;
+  if (name == "scalar") return true;
+#if defined(RGBDO_X86_KERNELS)
+  if (name == "avx2") return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+  if (name == "sse4.2-popcnt") return __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
+#endif
+#if defined(RGBDO_NEON_KERNELS)
+#if defined(__aarch64__)
+  if (name == "neon") return true;  // Advanced SIMD is mandatory on AArch64
+#else
+  if (name == "neon") return (getauxval(AT_HWCAP) & (1UL << 12)) != 0;  // HWCAP_NEON
+#endif
+#endif
+  return false;
+}
 
 bool scalar_forced() {
   const char* v = std::getenv("RGBDO_FORCE_SCALAR");

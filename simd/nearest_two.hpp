@@ -14,9 +14,14 @@ struct NearestTwo {
   std::uint32_t second = UINT32_MAX;  // UINT32_MAX: fewer than two candidates
 };
 
-// Binary descriptors of `bytes` bytes, rows `stride` bytes apart. Ties keep the lowest index.
-void nearest_two_hamming_scalar(const std::uint8_t* query, int n_query, std::size_t query_stride,
-                                const std::uint8_t* train, int n_train, std::size_t train_stride,
-                                int bytes, NearestTwo* query_out, NearestTwo* train_out);
+// Binary descriptors of `bytes` bytes, rows `stride` bytes apart (no alignment needed).
+// Ties keep the lowest index. All kernels share this signature and this exact output.
+#define RGBDO_NEAREST_TWO_HAMMING(name)                                                                       \
+  void name(const std::uint8_t* query, int n_query, std::size_t query_stride, const std::uint8_t* train,     \
+            int n_train, std::size_t train_stride, int bytes, NearestTwo* query_out, NearestTwo* train_out)
+RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_scalar);  // simd/scalar/hamming_scalar.cpp, the reference
+RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_popcnt);  // simd/x86/hamming_popcnt.cpp (x86-64 builds)
+RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_avx2);    // simd/x86/hamming_avx2.cpp (x86-64 builds)
+RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_neon);    // simd/arm/hamming_neon.cpp (ARM builds)
 
 }  // namespace rgbdo::simd

@@ -1,0 +1,124 @@
+// Every compiled kernel set this CPU supports against the scalar reference, bit for bit:
+// sizes at lane boundaries, empty and single sets, unaligned rows, odd strides, heavy ties,
+// and real ORB descriptors from the bundled frames.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <opencv2/core.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "kernels.hpp"
+#include "rgbd_odometry/config.hpp"
+#include "rgbd_odometry/match.hpp"
+#include "rgbd_odometry/odometry.hpp"
+#include "rgbd_odometry/tum_sequence.hpp"
+
+namespace rgbdo {
+namespace {
+
+bool operator==(const simd::NearestTwo& a, const simd::NearestTwo& b) {
+  return a.best_index == b.best_index && a.best == b.best && a.second == b.second;
+}
+
+std::vector<const simd::KernelSet*> runnable_sets() {
+  std::vector<const simd::KernelSet*> sets;
+  for (const auto& s : simd::compiled_kernel_sets())
+    if (simd::cpu_supports(s)) sets.push_back(&s);
+  return sets;
+}
+
+// Rows of `bytes` bytes, `stride` apart, starting `offset` bytes into the buffer. alphabet
+// > 0 draws every byte from few values, so that equal distances (ties) are frequent.
+std::vector<std::uint8_t> descriptors(int n, int bytes, std::size_t stride, int offset, unsigned seed, int alphabet) {
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(offset) + stride * static_cast<std::size_t>(n) + 1);
+  std::mt19937 rng(seed);
+  for (int i = 0; i < n; ++i)
+    for (int b = 0; b < bytes; ++b) {
+      const unsigned v = alphabet > 0 ? (rng() % static_cast<unsigned>(alphabet)) * 0x11u : rng();
+      buf[static_cast<std::size_t>(offset) + stride * static_cast<std::size_t>(i) + static_cast<std::size_t>(b)] =
+          static_cast<std::uint8_t>(v);
+    }
+  return buf;
+}
+
+void expect_same_as_scalar(const simd::KernelSet& set, const std::uint8_t* q, int nq, std::size_t qs,
+                           const std::uint8_t* t, int nt, std::size_t ts, int bytes, const std::string& what) {
+  std::vector<simd::NearestTwo> qr(static_cast<std::size_t>(nq)), tr(static_cast<std::size_t>(nt));
+  std::vector<simd::NearestTwo> qk(static_cast<std::size_t>(nq), {7, 7, 7}), tk(static_cast<std::size_t>(nt), {7, 7, 7});
+  simd::nearest_two_hamming_scalar(q, nq, qs, t, nt, ts, bytes, qr.data(), tr.data());
+  set.nearest_two_hamming(q, nq, qs, t, nt, ts, bytes, qk.data(), tk.data());
+  for (int i = 0; i < nq; ++i)
+    ASSERT_TRUE(qk[static_cast<size_t>(i)] == qr[static_cast<size_t>(i)]) << set.name << " " << what << " query " << i;
+  for (int j = 0; j < nt; ++j)
+    ASSERT_TRUE(tk[static_cast<size_t>(j)] == tr[static_cast<size_t>(j)]) << set.name << " " << what << " train " << j;
+}
+
+TEST(HammingKernels, ThisCpuRunsAtLeastOneSimdSet) {
+  // On x86-64 with AVX2 or on ARM with NEON, the scalar set alone means dispatch is broken.
+  const auto sets = runnable_sets();
+  ASSERT_FALSE(sets.empty());
+  EXPECT_STREQ(sets.back()->name, "scalar");
+#if defined(__x86_64__) || defined(__arm__) || defined(__aarch64__)
+  EXPECT_GE(sets.size(), 2u) << "no SIMD kernel set compiled in or supported";
+#endif
+}
+
+TEST(HammingKernels, BitExactAtLaneBoundariesAndEdgeSizes) {
+  const int sizes[] = {0, 1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 31, 32, 33, 63, 64, 65, 100};
+  for (const auto* set : runnable_sets())
+    for (int bytes : {32, 64, 8, 24, 61}) {  // 61: AKAZE's size, handled by the reference path
+      for (int nq : sizes)
+        for (int nt : {0, 1, 3, 4, 5, 7, 8, 9, 17, 33}) {
+          const auto q = descriptors(nq, bytes, static_cast<std::size_t>(bytes), 0, 1u + static_cast<unsigned>(nq), 0);
+          const auto t = descriptors(nt, bytes, static_cast<std::size_t>(bytes), 0, 100u + static_cast<unsigned>(nt), 0);
+          expect_same_as_scalar(*set, q.data(), nq, static_cast<std::size_t>(bytes), t.data(), nt,
+                                static_cast<std::size_t>(bytes), bytes,
+                                "bytes " + std::to_string(bytes) + " " + std::to_string(nq) + "x" + std::to_string(nt));
+        }
+    }
+}
+
+TEST(HammingKernels, BitExactOnUnalignedRowsOddStridesAndTies) {
+  for (const auto* set : runnable_sets())
+    for (int offset : {1, 3, 7})
+      for (int alphabet : {0, 2, 3}) {
+        const std::size_t stride = 32 + static_cast<std::size_t>(offset);  // rows not multiples of 8 apart
+        const auto q = descriptors(45, 32, stride, offset, 5, alphabet);
+        const auto t = descriptors(123, 32, stride + 2, offset, 6, alphabet);
+        expect_same_as_scalar(*set, q.data() + offset, 45, stride, t.data() + offset, 123, stride + 2, 32,
+                              "offset " + std::to_string(offset) + " alphabet " + std::to_string(alphabet));
+      }
+}
+
+TEST(HammingKernels, BitExactOnRealOrbDescriptors) {
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  OdometryPipeline pipeline(config);
+  ProcessedFrame a, b;
+  pipeline.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), a);
+  pipeline.extract(load_tum_frame(seq.frames[9], 5000, 640, 480), b);
+  const cv::Mat& qa = a.features.descriptors;
+  const cv::Mat& tb = b.features.descriptors;
+  ASSERT_GT(qa.rows, 500);
+  ASSERT_EQ(qa.cols, 32);
+  for (const auto* set : runnable_sets())
+    expect_same_as_scalar(*set, qa.data, qa.rows, qa.step, tb.data, tb.rows, tb.step, 32, "ORB frames 0 and 9");
+}
+
+TEST(KernelChoice, ActiveSetIsTheBestSupportedOneOrTheForcedScalar) {
+  const char* forced = std::getenv("RGBDO_FORCE_SCALAR");
+  const bool expect_scalar = forced != nullptr && *forced != '\0' && std::string(forced) != "0";
+  EXPECT_EQ(simd::scalar_forced(), expect_scalar);
+  const std::string expected = expect_scalar ? "scalar" : runnable_sets().front()->name;
+  EXPECT_EQ(simd::active_kernels().name, expected);
+  // The matcher binds the active set when built and runs that kernel.
+  SymmetricMatcher matcher(0.8);
+  std::vector<Match> out;
+  matcher.match(cv::Mat(10, 32, CV_8U, cv::Scalar(1)), cv::Mat(12, 32, CV_8U, cv::Scalar(2)), out);
+  EXPECT_EQ(matcher.kernel_name(), expected);
+}
+
+}  // namespace
+}  // namespace rgbdo
