@@ -93,6 +93,8 @@ void BM_Match_BFMatcherKnn2x(benchmark::State& state) {
   cv::BFMatcher bf(cv::NORM_HAMMING);
   std::vector<std::vector<cv::DMatch>> ab, ba;
   for (auto _ : state) {
+    ab.clear();  // knnMatch appends to its output
+    ba.clear();
     bf.knnMatch(a, b, ab, 2);
     bf.knnMatch(b, a, ba, 2);
     int kept = 0;
@@ -138,7 +140,7 @@ BENCHMARK(BM_Ransac)->Unit(benchmark::kMicrosecond);
 
 void BM_Covariance(benchmark::State& state) {
   const auto& f = fixture();
-  PerturbationCovariance cov(f.config.covariance);
+  PerturbationCovariance cov(f.config.covariance, f.config.features.max_features);
   Matrix6d c;
   std::uint64_t seed = 0;
   for (auto _ : state) {

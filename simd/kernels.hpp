@@ -6,6 +6,7 @@
 #include <span>
 
 #include "nearest_two.hpp"
+#include "perturb.hpp"
 
 namespace rgbdo::simd {
 
@@ -13,9 +14,12 @@ using NearestTwoHammingFn = void (*)(const std::uint8_t* query, int n_query, std
                                      const std::uint8_t* train, int n_train, std::size_t train_stride, int bytes,
                                      NearestTwo* query_out, NearestTwo* train_out);
 
+using PerturbationSumsFn = void (*)(const PerturbationInput& in, const PerturbationSums& out);
+
 struct KernelSet {
   const char* name;  // "scalar", "neon", "avx2", ...
   NearestTwoHammingFn nearest_two_hamming;
+  PerturbationSumsFn perturbation_sums;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.

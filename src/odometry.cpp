@@ -35,7 +35,7 @@ OdometryPipeline::OdometryPipeline(const Config& config)
       matcher_(config.matching.ratio),
       backprojector_(config.camera, config.depth),
       ransac_(config.ransac, SensorNoise{config.covariance.depth_noise_coeff, config.covariance.pixel_sigma_px, config.camera.fx}),
-      covariance_(config.covariance) {}
+      covariance_(config.covariance, config.features.max_features) {}
 
 void OdometryPipeline::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.times = {frame.t_colour_ns, frame.t_depth_ns};

@@ -23,7 +23,17 @@ bool fit_rigid(std::span<const Eigen::Vector3d> src, std::span<const Eigen::Vect
 
   Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();  // sum w (dst - mean)(src - mean)^T
   for (size_t k = 0; k < n; ++k) cross += w(k) * (dst[k] - mean_dst) * (src[k] - mean_src).transpose();
+  // Centred first (better conditioned than raw sums), then the shared solve.
+  if (!fit_from_sums(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), cross, total, T_dst_src)) return false;
+  T_dst_src.translation() = mean_dst - T_dst_src.linear() * mean_src;
+  return true;
+}
 
+bool fit_from_sums(const Eigen::Vector3d& sum_s, const Eigen::Vector3d& sum_d, const Eigen::Matrix3d& sum_ds,
+                   double total, Eigen::Isometry3d& T_dst_src) {
+  if (!(total > 0)) return false;
+  const Eigen::Vector3d mean_src = sum_s / total, mean_dst = sum_d / total;
+  const Eigen::Matrix3d cross = sum_ds - total * mean_dst * mean_src.transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Vector3d s = svd.singularValues();
   // Rank < 2 (coincident or collinear points): the rotation about their line is free.

@@ -2,6 +2,10 @@
 
 #include <random>
 
+#include <Eigen/Geometry>
+
+#include "kernels.hpp"
+#include "perturb_reference.hpp"
 #include "rgbd_odometry/covariance.hpp"
 #include "rgbd_odometry/noise_model.hpp"
 #include "rgbd_odometry/umeyama.hpp"
@@ -61,7 +65,7 @@ TEST(PerturbationCovariance, AgreesWithIndependentMonteCarlo) {
   std::vector<Eigen::Vector3d> prev;
   for (const auto& c : curr) prev.push_back(T * c);
   // WHEN the pipeline's perturbation covariance uses many perturbations
-  PerturbationCovariance pc(paper_config(4000));
+  PerturbationCovariance pc(paper_config(4000), 150);
   Rng rng(7);
   Matrix6d cov;
   ASSERT_TRUE(pc.estimate(prev, curr, T, rng, cov));
@@ -88,7 +92,7 @@ TEST(PerturbationCovariance, TranslationVarianceFollowsTheNoiseModelAnalytically
   }
   const double sigma_z = 1.425e-3 * 4.0;
   const double expected = 2 * sigma_z * sigma_z * sw2 / (sw * sw);
-  PerturbationCovariance pc(paper_config(3000));
+  PerturbationCovariance pc(paper_config(3000), 400);
   Rng rng(3);
   Matrix6d cov;
   ASSERT_TRUE(pc.estimate(pts, pts, Eigen::Isometry3d::Identity(), rng, cov));
@@ -98,9 +102,9 @@ TEST(PerturbationCovariance, TranslationVarianceFollowsTheNoiseModelAnalytically
 TEST(PerturbationCovariance, ResultIsSymmetricPositiveDefiniteAndScaled) {
   const auto curr = scene(60, 2);
   CovarianceConfig config = paper_config(100);
-  PerturbationCovariance unscaled(config);
+  PerturbationCovariance unscaled(config, 60);
   config.scale = 9.0;
-  PerturbationCovariance scaled(config);
+  PerturbationCovariance scaled(config, 60);
   Rng r1(5), r2(5);
   Matrix6d a, b;
   ASSERT_TRUE(unscaled.estimate(curr, curr, Eigen::Isometry3d::Identity(), r1, a));
@@ -119,6 +123,110 @@ TEST(PerturbationCovariance, VarianceFactorGrowsWithResiduals) {
   const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
   EXPECT_DOUBLE_EQ(PerturbationCovariance::variance_factor(curr, curr, I, 1.425e-3), 1.0);  // floored
   EXPECT_GT(PerturbationCovariance::variance_factor(noisy, curr, I, 1.425e-3), 10.0);
+}
+
+// Inputs of the perturbation kernel for a 300-point scene with the given weights.
+struct KernelInput {
+  std::vector<float> v[13];  // sx sy sz dx dy dz, sigmas (6), w
+  simd::PerturbationInput in;
+  KernelInput(const std::vector<Eigen::Vector3d>& s, const std::vector<Eigen::Vector3d>& d, bool uniform) {
+    for (size_t k = 0; k < s.size(); ++k) {
+      const Eigen::Vector3d ss = point_sigma(s[k], 1.425e-3), sd = point_sigma(d[k], 1.425e-3);
+      const double vals[12] = {s[k].x(), s[k].y(), s[k].z(), d[k].x(), d[k].y(), d[k].z(),
+                               ss.x(), ss.y(), ss.z(), sd.x(), sd.y(), sd.z()};
+      for (int c = 0; c < 12; ++c) v[c].push_back(static_cast<float>(vals[c]));
+      v[12].push_back(uniform ? 1.0f / static_cast<float>(s.size()) : static_cast<float>(1 + k % 7) / 1200.0f);
+    }
+    in.points = static_cast<int>(s.size());
+    in.perturbations = 104;
+    in.sx = v[0].data(), in.sy = v[1].data(), in.sz = v[2].data();
+    in.dx = v[3].data(), in.dy = v[4].data(), in.dz = v[5].data();
+    in.sigma_sx = v[6].data(), in.sigma_sy = v[7].data(), in.sigma_sz = v[8].data();
+    in.sigma_dx = v[9].data(), in.sigma_dy = v[10].data(), in.sigma_dz = v[11].data();
+    in.w = v[12].data();
+    in.seed = 77;
+  }
+};
+
+struct Sums {
+  std::vector<float> data = std::vector<float>(15 * 104, -1.0f);
+  simd::PerturbationSums view() {
+    simd::PerturbationSums o;
+    for (int j = 0; j < 3; ++j) o.s[j] = data.data() + j * 104, o.d[j] = data.data() + (3 + j) * 104;
+    for (int e = 0; e < 9; ++e) o.m[e] = data.data() + (6 + e) * 104;
+    return o;
+  }
+};
+
+TEST(PerturbationKernels, EverySetMatchesTheScalarReference) {
+  const auto s = scene(300, 8);
+  std::vector<Eigen::Vector3d> d;
+  for (const auto& p : s) d.push_back(p + Eigen::Vector3d(0.01, 0, 0));
+  KernelInput input(s, d, false);
+  Sums reference;
+  simd::perturbation_sums_scalar(input.in, reference.view());
+  for (const auto& set : simd::compiled_kernel_sets()) {
+    if (!simd::cpu_supports(set)) continue;
+    Sums got;
+    set.perturbation_sums(input.in, got.view());
+    float worst = 0;
+    for (size_t i = 0; i < got.data.size(); ++i)
+      worst = std::max(worst, std::abs(got.data[i] - reference.data[i]) / (1.0f + std::abs(reference.data[i])));
+    // x86 twins perform the reference's IEEE operations exactly; NEON's divide and sqrt are
+    // Newton-refined estimates (perturb.hpp): within 2e-6 relative.
+    const bool exact = std::string(set.name) != "neon";
+    if (exact) EXPECT_EQ(worst, 0.0f) << set.name;
+    else EXPECT_LT(worst, 2e-6f) << set.name;
+  }
+}
+
+TEST(PerturbationKernels, UniformDrawsNeverReachZeroOrOne) {
+  // The extreme raw draws map strictly inside (0, 1): log and sqrt stay finite.
+  EXPECT_GT(simd::reference::to_unit(0u), 0.0f);
+  EXPECT_LT(simd::reference::to_unit(0xFFFFFFFFu), 1.0f);
+  EXPECT_LT(simd::reference::log_unit(simd::reference::to_unit(0xFFFFFFFFu)), 0.0f);
+  float z0, z1;
+  simd::reference::box_muller(0xFFFFFFFFu, 0u, z0, z1);
+  EXPECT_TRUE(std::isfinite(z0) && std::isfinite(z1));
+}
+
+TEST(PerturbationKernels, EachPerturbationMatchesEigenUmeyama) {
+  // GIVEN 300 pairs, uniform weights (Eigen::umeyama has none), the kernel's own noise draws
+  const auto s = scene(300, 9);
+  Vector6d xi;
+  xi << 0.02, -0.01, 0.005, 0.01, -0.02, 0.005;
+  const Eigen::Isometry3d T = transform_from_xi(xi);
+  std::vector<Eigen::Vector3d> d;
+  for (const auto& p : s) d.push_back(T * p);
+  KernelInput input(s, d, true);
+  Sums sums;
+  simd::active_kernels().perturbation_sums(input.in, sums.view());
+  std::vector<float> noise(static_cast<size_t>(104 * 300 * 6));
+  simd::perturbation_noise_scalar(77, 300, 104, noise.data());
+  double weight_sum = 0;
+  for (float w : input.v[12]) weight_sum += w;
+  for (int p = 0; p < 100; ++p) {
+    // WHEN perturbation p is fitted from the batched sums and by Eigen::umeyama on the cloud
+    Eigen::Matrix3Xd src(3, 300), dst(3, 300);
+    for (int k = 0; k < 300; ++k) {
+      const float* n = &noise[(static_cast<size_t>(p) * 300 + static_cast<size_t>(k)) * 6];
+      for (int c = 0; c < 3; ++c) {
+        src(c, k) = input.v[c][static_cast<size_t>(k)] + double(input.v[6 + c][static_cast<size_t>(k)]) * n[c];
+        dst(c, k) = input.v[3 + c][static_cast<size_t>(k)] + double(input.v[9 + c][static_cast<size_t>(k)]) * n[3 + c];
+      }
+    }
+    const Eigen::Matrix4d eigen = Eigen::umeyama(src, dst, false);
+    Eigen::Vector3d ss, dd;
+    Eigen::Matrix3d m;
+    for (int j = 0; j < 3; ++j) ss(j) = sums.data[static_cast<size_t>(j * 104 + p)], dd(j) = sums.data[static_cast<size_t>((3 + j) * 104 + p)];
+    for (int e = 0; e < 9; ++e) m(e / 3, e % 3) = sums.data[static_cast<size_t>((6 + e) * 104 + p)];
+    Eigen::Isometry3d batch;
+    ASSERT_TRUE(fit_from_sums(ss, dd, m, weight_sum, batch));
+    // THEN they agree to float precision on a ~3 m scene: 5e-6 m and 5e-6 rad (measured up to
+    // 2.3e-6 with NEON's Newton-refined divide and sqrt, less on x86)
+    EXPECT_LT((batch.translation() - eigen.block<3, 1>(0, 3)).norm(), 5e-6) << "perturbation " << p;
+    EXPECT_LT(rotation_angle(batch.linear().transpose() * eigen.block<3, 3>(0, 0)), 5e-6) << "perturbation " << p;
+  }
 }
 
 TEST(CovarianceValidity, RejectsNonFiniteAsymmetricAndIndefinite) {

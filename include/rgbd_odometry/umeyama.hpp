@@ -11,4 +11,10 @@ namespace rgbdo {
 [[nodiscard]] bool fit_rigid(std::span<const Eigen::Vector3d> src, std::span<const Eigen::Vector3d> dst,
                              std::span<const double> weights, Eigen::Isometry3d& T_dst_src);
 
+// The same fit from the weighted sums alone, sum_s = sum w s, sum_d = sum w d,
+// sum_ds = sum w d s^T, total = sum w: the small fixed-size solve (3x3 SVD, reflections
+// excluded) that the batched covariance runs once per perturbation.
+[[nodiscard]] bool fit_from_sums(const Eigen::Vector3d& sum_s, const Eigen::Vector3d& sum_d, const Eigen::Matrix3d& sum_ds,
+                                 double total, Eigen::Isometry3d& T_dst_src);
+
 }  // namespace rgbdo
