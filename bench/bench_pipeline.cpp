@@ -37,9 +37,10 @@ struct Fixture {
     SymmetricMatcher(config.matching.ratio).match(processed[0].features.descriptors, processed[1].features.descriptors, matches);
     build_point_pairs(matches, processed[0].geometry, processed[0].times, processed[1].geometry, processed[1].times,
                       nullptr, pairs);
-    RigidRansac ransac(config.ransac, SensorNoise{});
+    RigidRansac ransac(config.ransac, SensorNoise{}, config.features.max_features);
     Rng rng(1);
-    const RansacResult r = ransac.estimate(pairs.prev, pairs.curr, rng);
+    RansacResult r;
+    ransac.estimate(pairs.prev, pairs.curr, rng, r);
     motion = r.T_prev_curr;
     for (int k : r.inliers) {
       inlier_prev.push_back(pairs.prev[static_cast<size_t>(k)]);
@@ -125,12 +126,13 @@ BENCHMARK(BM_BackProject)->Unit(benchmark::kMicrosecond);
 
 void BM_Ransac(benchmark::State& state) {
   const auto& f = fixture();
-  RigidRansac ransac(f.config.ransac, SensorNoise{});
+  RigidRansac ransac(f.config.ransac, SensorNoise{}, f.config.features.max_features);
   std::uint64_t seed = 0;
   int hypotheses = 0;
+  RansacResult r;
   for (auto _ : state) {
     Rng rng(seed++);
-    const auto r = ransac.estimate(f.pairs.prev, f.pairs.curr, rng);
+    ransac.estimate(f.pairs.prev, f.pairs.curr, rng, r);
     hypotheses += r.hypotheses;
   }
   state.counters["pairs"] = static_cast<double>(f.pairs.size());

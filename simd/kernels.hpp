@@ -7,6 +7,7 @@
 
 #include "nearest_two.hpp"
 #include "perturb.hpp"
+#include "score.hpp"
 
 namespace rgbdo::simd {
 
@@ -16,10 +17,13 @@ using NearestTwoHammingFn = void (*)(const std::uint8_t* query, int n_query, std
 
 using PerturbationSumsFn = void (*)(const PerturbationInput& in, const PerturbationSums& out);
 
+using ScoreRigidFn = void (*)(const RigidScoreInput& in, int& count, float& cost);
+
 struct KernelSet {
   const char* name;  // "scalar", "neon", "avx2", ...
   NearestTwoHammingFn nearest_two_hamming;
   PerturbationSumsFn perturbation_sums;
+  ScoreRigidFn score_rigid;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.

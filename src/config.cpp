@@ -50,6 +50,7 @@ std::vector<Param> param_table(Config& c) {
       {"ransac.max_iterations", &c.ransac.max_iterations, 1, 1000000},
       {"ransac.refine_threshold", &c.ransac.refine_threshold},
       {"ransac.min_inliers", &c.ransac.min_inliers, 3, 1000000},
+      {"ransac.adaptive_stop", &c.ransac.adaptive_stop},
       {"covariance.perturbations", &c.covariance.perturbations, 8, 100000},
       {"covariance.depth_noise_coeff", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
       {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100},
@@ -110,6 +111,17 @@ void set_from_text(Param& p, const std::string& text) {
       p.target);
 }
 
+// OpenCV's YAML reader keeps "value  # comment" whole for unquoted strings and booleans.
+std::string without_comment(std::string text) {
+  for (size_t i = 1; i < text.size(); ++i)
+    if (text[i] == '#' && (text[i - 1] == ' ' || text[i - 1] == '\t')) {
+      text.resize(i);
+      break;
+    }
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.pop_back();
+  return text;
+}
+
 // Sets a parameter from a FileStorage node after checking type and range.
 void set_from_node(Param& p, const cv::FileNode& node) {
   std::visit(
@@ -118,9 +130,9 @@ void set_from_node(Param& p, const cv::FileNode& node) {
         if constexpr (std::is_same_v<T, std::string>) {
           if (!node.isString())
             throw ConfigError("config key '" + p.key + "': expected a string");
-          *target = static_cast<std::string>(node);
+          *target = without_comment(static_cast<std::string>(node));
         } else if constexpr (std::is_same_v<T, bool>) {
-          if (node.isString()) set_from_text(p, static_cast<std::string>(node));
+          if (node.isString()) set_from_text(p, without_comment(static_cast<std::string>(node)));
           else if (node.isInt()) set_from_text(p, std::to_string(static_cast<int>(node)));
           else throw ConfigError("config key '" + p.key + "': expected true/false");
         } else {

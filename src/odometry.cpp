@@ -34,8 +34,17 @@ OdometryPipeline::OdometryPipeline(const Config& config)
       detector_(config.features),
       matcher_(config.matching.ratio),
       backprojector_(config.camera, config.depth),
-      ransac_(config.ransac, SensorNoise{config.covariance.depth_noise_coeff, config.covariance.pixel_sigma_px, config.camera.fx}),
-      covariance_(config.covariance, config.features.max_features) {}
+      ransac_(config.ransac, SensorNoise{config.covariance.depth_noise_coeff, config.covariance.pixel_sigma_px, config.camera.fx},
+              config.features.max_features),
+      covariance_(config.covariance, config.features.max_features) {
+  // Sized once for the largest possible frame: the pair stage never allocates afterwards.
+  const auto capacity = static_cast<size_t>(config.features.max_features);
+  matches_.reserve(capacity);
+  for (auto* v : {&pairs_.prev, &pairs_.curr, &inlier_prev_, &inlier_curr_}) v->reserve(capacity);
+  pairs_.match_index.reserve(capacity);
+  fit_.inliers.reserve(capacity);
+  refined_.inliers.reserve(capacity);
+}
 
 void OdometryPipeline::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.times = {frame.t_colour_ns, frame.t_depth_ns};
@@ -107,44 +116,44 @@ PairResult OdometryPipeline::estimate(const ProcessedFrame& prev, const Processe
   Rng ransac_rng(mix(config_.seed, 2 * pair_index));
   Rng covariance_rng(mix(config_.seed, 2 * pair_index + 1));
   t0 = Clock::now();
-  RansacResult fit = ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng);
+  ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_);
   r.times.ransac_ms = ms_since(t0);
-  if (fit.status != Status::Ok) return fail(fit.status);
+  if (fit_.status != Status::Ok) return fail(fit_.status);
 
   if (compensate) {
     // Second pass: carry the depths to colour time with this pair's own velocity, which is
     // better than the previous pair's whenever the depth frames are far enough apart.
     t0 = Clock::now();
-    const MotionPrior own = motion_from(fit.T_prev_curr, dt_s);
+    const MotionPrior own = motion_from(fit_.T_prev_curr, dt_s);
     build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, &own, pairs_);
     r.times.backproject_ms += ms_since(t0);
     t0 = Clock::now();
-    RansacResult refined = ransac_.refine(pairs_.prev, pairs_.curr, fit.T_prev_curr);
+    ransac_.refine(pairs_.prev, pairs_.curr, fit_.T_prev_curr, refined_);
     r.times.ransac_ms += ms_since(t0);
-    if (refined.status == Status::Ok) {
-      refined.hypotheses = fit.hypotheses;
-      fit = std::move(refined);
+    if (refined_.status == Status::Ok) {
+      refined_.hypotheses = fit_.hypotheses;
+      std::swap(fit_, refined_);  // swaps buffers, allocates nothing
     }
   }
 
   inlier_prev_.clear();
   inlier_curr_.clear();
-  for (int k : fit.inliers) {
+  for (int k : fit_.inliers) {
     inlier_prev_.push_back(pairs_.prev[static_cast<size_t>(k)]);
     inlier_curr_.push_back(pairs_.curr[static_cast<size_t>(k)]);
   }
   t0 = Clock::now();
   Matrix6d cov;
-  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit.T_prev_curr, covariance_rng, cov);
+  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
   r.times.covariance_ms = ms_since(t0);
   if (!cov_ok) return fail(Status::CovarianceFailed);
 
   r.status = Status::Ok;
-  r.inliers = static_cast<int>(fit.inliers.size());
-  r.inlier_threshold_m = fit.threshold_m;
-  r.T_prev_curr = fit.T_prev_curr;
+  r.inliers = static_cast<int>(fit_.inliers.size());
+  r.inlier_threshold_m = fit_.threshold_m;
+  r.T_prev_curr = fit_.T_prev_curr;
   r.covariance = cov;
-  if (dt_s > 0) last_motion_ = motion_from(fit.T_prev_curr, dt_s);
+  if (dt_s > 0) last_motion_ = motion_from(fit_.T_prev_curr, dt_s);
   return r;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "rgbd_odometry/noise_model.hpp"
+#include "kernels.hpp"
 #include "rgbd_odometry/umeyama.hpp"
 
 namespace rgbdo {
@@ -17,7 +18,31 @@ constexpr double kMaxRefinementRotation_rad = 0.05;
 
 }  // namespace
 
-RigidRansac::RigidRansac(const RansacConfig& ransac, const SensorNoise& noise) : config_(ransac), noise_(noise) {}
+RigidRansac::RigidRansac(const RansacConfig& ransac, const SensorNoise& noise, int capacity)
+    : config_(ransac), noise_(noise), score_(simd::active_kernels().score_rigid) {
+  const auto n = static_cast<size_t>(capacity);
+  for (auto* v : {&px_, &py_, &pz_, &cx_, &cy_, &cz_}) v->reserve(n);
+  fit_weights_.reserve(n);
+  scratch_inliers_.reserve(n);
+  fit_prev_.reserve(n);
+  fit_curr_.reserve(n);
+}
+
+void RigidRansac::load(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr) {
+  const size_t n = prev.size();
+  for (auto* v : {&px_, &py_, &pz_, &cx_, &cy_, &cz_}) v->resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    px_[k] = static_cast<float>(prev[k].x()), py_[k] = static_cast<float>(prev[k].y()), pz_[k] = static_cast<float>(prev[k].z());
+    cx_[k] = static_cast<float>(curr[k].x()), cy_[k] = static_cast<float>(curr[k].y()), cz_[k] = static_cast<float>(curr[k].z());
+  }
+}
+
+void RigidRansac::select_inliers(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                 const Eigen::Isometry3d& T, double threshold, std::vector<int>& out) const {
+  out.clear();
+  for (size_t k = 0; k < prev.size(); ++k)
+    if ((prev[k] - T * curr[k]).norm() < threshold) out.push_back(static_cast<int>(k));
+}
 
 Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d>& prev,
                                                const std::vector<Eigen::Vector3d>& curr,
@@ -73,21 +98,43 @@ bool RigidRansac::sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev,
   return false;
 }
 
-RansacResult RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                   Rng& rng) {
-  RansacResult result;
-  const int n = static_cast<int>(prev.size());
-  if (n < std::max(3, config_.min_inliers)) return result;
+void RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, Rng& rng,
+                           RansacResult& result) {
+  result.status = Status::RansacFailed;
+  result.T_prev_curr = Eigen::Isometry3d::Identity();
+  result.inliers.clear();
+  result.threshold_m = 0;
+  result.hypotheses = 0;
+  if (static_cast<int>(prev.size()) < std::max(3, config_.min_inliers)) return;
+  Eigen::Isometry3d best;
+  const int hypotheses = sample_hypotheses(prev, curr, rng, best);
+  if (hypotheses == 0) {
+    result.status = Status::DegenerateSample;
+    return;
+  }
+  refine_loaded(prev, curr, best, result);
+  result.hypotheses = hypotheses;
+}
 
-  const double threshold_sq = config_.inlier_threshold_m * config_.inlier_threshold_m;
-  int best_count = -1;
-  double best_cost = 0;
-  Eigen::Isometry3d best = Eigen::Isometry3d::Identity();
+int RigidRansac::sample_hypotheses(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                   Rng& rng, Eigen::Isometry3d& best) {
+  const int n = static_cast<int>(prev.size());
+  if (n < 3) return 0;
+  load(prev, curr);
+  simd::RigidScoreInput in;
+  in.n = n;
+  in.px = px_.data(), in.py = py_.data(), in.pz = pz_.data();
+  in.cx = cx_.data(), in.cy = cy_.data(), in.cz = cz_.data();
+  in.threshold_sq = static_cast<float>(config_.inlier_threshold_m * config_.inlier_threshold_m);
+
+  int hypotheses = 0, best_count = -1;
+  float best_cost = 0;
+  best = Eigen::Isometry3d::Identity();
   int needed = config_.max_iterations;
   // Degenerate draws are cheap and do not count as hypotheses, but are bounded too.
   const int max_draws = 10 * config_.max_iterations;
-  for (int draw = 0; draw < max_draws && result.hypotheses < needed; ++draw) {
-    const auto un = static_cast<std::uint32_t>(n);
+  const auto un = static_cast<std::uint32_t>(n);
+  for (int draw = 0; draw < max_draws && hypotheses < needed; ++draw) {
     const int idx[3] = {static_cast<int>(rng.below(un)), static_cast<int>(rng.below(un)), static_cast<int>(rng.below(un))};
     if (idx[0] == idx[1] || idx[0] == idx[2] || idx[1] == idx[2]) continue;
     if (sample_is_degenerate(prev, curr, idx)) continue;
@@ -96,56 +143,47 @@ RansacResult RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, con
     const Eigen::Vector3d d[3] = {prev[static_cast<size_t>(idx[0])], prev[static_cast<size_t>(idx[1])],
                                   prev[static_cast<size_t>(idx[2])]};
     Eigen::Isometry3d T;
-    if (!fit_rigid(s, d, {}, T)) continue;
-    ++result.hypotheses;
+    if (!fit_triplet(s, d, T)) continue;
+    ++hypotheses;
 
     // Score: inlier count, ties broken by the truncated squared error (MSAC's cost).
+    for (int e = 0; e < 9; ++e) in.r[e] = static_cast<float>(T.linear()(e / 3, e % 3));
+    for (int e = 0; e < 3; ++e) in.t[e] = static_cast<float>(T.translation()(e));
     int count = 0;
-    double cost = 0;
-    for (int k = 0; k < n; ++k) {
-      const double e = (prev[static_cast<size_t>(k)] - T * curr[static_cast<size_t>(k)]).squaredNorm();
-      if (e < threshold_sq) {
-        ++count;
-        cost += e;
-      } else {
-        cost += threshold_sq;
-      }
-    }
+    float cost = 0;
+    score_(in, count, cost);
     if (count > best_count || (count == best_count && cost < best_cost)) {
       best_count = count;
       best_cost = cost;
       best = T;
+      if (!config_.adaptive_stop) continue;
       const double w = static_cast<double>(count) / n;
       const double p_fail = 1.0 - w * w * w;
       if (p_fail <= 1e-12) {
-        needed = result.hypotheses;
+        needed = hypotheses;
       } else {
         const double k = std::log(1.0 - kSuccessProbability) / std::log(p_fail);
         needed = std::min(config_.max_iterations, static_cast<int>(std::ceil(k)));
       }
     }
   }
-  if (best_count < 0) {
-    result.status = Status::DegenerateSample;
-    return result;
-  }
-  const int hypotheses = result.hypotheses;
-  result = refine(prev, curr, best);
-  result.hypotheses = hypotheses;
-  return result;
+  return hypotheses;
 }
 
-RansacResult RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                 const Eigen::Isometry3d& initial) {
-  RansacResult result;
+void RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                         const Eigen::Isometry3d& initial, RansacResult& result) {
+  refine_loaded(prev, curr, initial, result);
+}
+
+void RigidRansac::refine_loaded(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                const Eigen::Isometry3d& initial, RansacResult& result) {
   result.T_prev_curr = initial;
-  const size_t n = prev.size();
+  result.hypotheses = 0;
   double threshold = config_.inlier_threshold_m;
   std::vector<int>& inliers = result.inliers;
+  inliers.clear();
   for (int round = 0; round < kMaxRefinements; ++round) {
-    scratch_inliers_.clear();
-    for (size_t k = 0; k < n; ++k)
-      if ((prev[k] - result.T_prev_curr * curr[k]).norm() < threshold) scratch_inliers_.push_back(static_cast<int>(k));
+    select_inliers(prev, curr, result.T_prev_curr, threshold, scratch_inliers_);
     if (scratch_inliers_.size() < 3) break;
     const bool stable = scratch_inliers_ == inliers;
     inliers.swap(scratch_inliers_);
@@ -179,7 +217,6 @@ RansacResult RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const
       result.T_prev_curr = refined;
   }
   result.status = static_cast<int>(inliers.size()) >= config_.min_inliers ? Status::Ok : Status::RansacFailed;
-  return result;
 }
 
 }  // namespace rgbdo

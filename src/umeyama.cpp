@@ -1,6 +1,7 @@
 #include "rgbd_odometry/umeyama.hpp"
 
 #include <Eigen/SVD>
+#include <cmath>
 
 namespace rgbdo {
 
@@ -26,6 +27,41 @@ bool fit_rigid(std::span<const Eigen::Vector3d> src, std::span<const Eigen::Vect
   // Centred first (better conditioned than raw sums), then the shared solve.
   if (!fit_from_sums(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), cross, total, T_dst_src)) return false;
   T_dst_src.translation() = mean_dst - T_dst_src.linear() * mean_src;
+  return true;
+}
+
+bool fit_triplet(const Eigen::Vector3d src[3], const Eigen::Vector3d dst[3], Eigen::Isometry3d& T_dst_src) {
+  const Eigen::Vector3d cs = (src[0] + src[1] + src[2]) / 3.0, cd = (dst[0] + dst[1] + dst[2]) / 3.0;
+  Eigen::Vector3d ns = (src[1] - src[0]).cross(src[2] - src[0]);
+  Eigen::Vector3d nd = (dst[1] - dst[0]).cross(dst[2] - dst[0]);
+  const double ls = ns.norm(), ld = nd.norm();
+  if (!(ls > 1e-12) || !(ld > 1e-12)) return false;
+  ns /= ls;
+  nd /= ld;
+  // R1: the shortest rotation taking ns to nd (Rodrigues); half a turn when they oppose.
+  Eigen::Matrix3d R1;
+  const double c = ns.dot(nd);
+  if (c > -1.0 + 1e-12) {
+    const Eigen::Vector3d v = ns.cross(nd);
+    Eigen::Matrix3d vx;
+    vx << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+    R1 = Eigen::Matrix3d::Identity() + vx + vx * vx / (1.0 + c);
+  } else {
+    const Eigen::Vector3d axis = (src[1] - src[0]).normalized();  // lies in the source plane
+    R1 = 2.0 * axis * axis.transpose() - Eigen::Matrix3d::Identity();
+  }
+  // In the destination plane: the angle about nd that best aligns the rotated source.
+  double sin_sum = 0, cos_sum = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d q = R1 * (src[i] - cs), p = dst[i] - cd;
+    sin_sum += nd.dot(q.cross(p));
+    cos_sum += q.dot(p);
+  }
+  const double theta = std::atan2(sin_sum, cos_sum);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(theta, nd).toRotationMatrix() * R1;
+  T_dst_src = Eigen::Isometry3d::Identity();
+  T_dst_src.linear() = R;
+  T_dst_src.translation() = cd - R * cs;
   return true;
 }
 

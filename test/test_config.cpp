@@ -70,6 +70,15 @@ TEST_F(ConfigFile, OutOfRangeAndWrongTypeAreRejectedByName) {
                       "camera.distortion");
 }
 
+TEST_F(ConfigFile, TrailingCommentsAfterStringsAndBooleansAreIgnored) {
+  const Config c = load_config(write("comments.yaml",
+                                     "%YAML:1.0\n---\nfeatures:\n  detector: AKAZE   # the detector\n"
+                                     "  descriptor: AKAZE # and its descriptor\nransac:\n  adaptive_stop: false  # 99.9 %\n"));
+  EXPECT_EQ(c.features.detector, "AKAZE");
+  EXPECT_EQ(c.features.descriptor, "AKAZE");
+  EXPECT_FALSE(c.ransac.adaptive_stop);
+}
+
 TEST_F(ConfigFile, MissingAndCorruptFilesAreNamed) {
   expect_error_naming([&] { load_config((dir / "none.yaml").string()); }, "none.yaml");
   expect_error_naming([&] { load_config(write("bad.yaml", "%YAML:1.0\n---\ncamera: [1, {\n")); }, "bad.yaml");

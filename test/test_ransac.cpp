@@ -3,6 +3,7 @@
 #include <random>
 
 #include "rgbd_odometry/geometry.hpp"
+#include "kernels.hpp"
 #include "rgbd_odometry/ransac.hpp"
 #include "rgbd_odometry/umeyama.hpp"
 
@@ -36,14 +37,21 @@ Scene make_scene(const Eigen::Isometry3d& T, int n, double outlier_fraction, dou
 
 RansacConfig paper_config() { return RansacConfig{}; }
 
+RansacResult run(RigidRansac& ransac, const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                 Rng& rng) {
+  RansacResult r;
+  ransac.estimate(prev, curr, rng, r);
+  return r;
+}
+
 TEST(Ransac, RecoversKnownMotionWithHalfTheMatchesWrong) {
   Vector6d xi;
   xi << 0.02, -0.01, 0.03, 0.01, -0.02, 0.015;
   const Eigen::Isometry3d truth = transform_from_xi(xi);
   const Scene s = make_scene(truth, 400, 0.5, 0.002, 7);
-  RigidRansac ransac(paper_config(), SensorNoise{});
+  RigidRansac ransac(paper_config(), SensorNoise{}, 1000);
   Rng rng(1);
-  const RansacResult r = ransac.estimate(s.prev, s.curr, rng);
+  const RansacResult r = run(ransac, s.prev, s.curr, rng);
   ASSERT_EQ(r.status, Status::Ok);
   const Eigen::Isometry3d err = truth.inverse() * r.T_prev_curr;
   EXPECT_LT(err.translation().norm(), 0.002);
@@ -81,9 +89,9 @@ TEST(Ransac, RayAlignedNoiseIsBetterFitAnisotropically) {
       prev.push_back(observe(truth * c));
     }
     // WHEN fitted by RANSAC + refinement, and by one plain least-squares fit
-    RigidRansac ransac(paper_config(), noise);
+    RigidRansac ransac(paper_config(), noise, 1000);
     Rng r(seed);
-    const RansacResult fit = ransac.estimate(prev, curr, r);
+    const RansacResult fit = run(ransac, prev, curr, r);
     ASSERT_EQ(fit.status, Status::Ok);
     Eigen::Isometry3d plain;
     ASSERT_TRUE(fit_rigid(curr, prev, {}, plain));
@@ -96,9 +104,9 @@ TEST(Ransac, RayAlignedNoiseIsBetterFitAnisotropically) {
 
 TEST(Ransac, SameSeedSameAnswer) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 200, 0.4, 0.003, 9);
-  RigidRansac a(paper_config(), SensorNoise{}), b(paper_config(), SensorNoise{});
+  RigidRansac a(paper_config(), SensorNoise{}, 1000), b(paper_config(), SensorNoise{}, 1000);
   Rng ra(42), rb(42);
-  const auto x = a.estimate(s.prev, s.curr, ra), y = b.estimate(s.prev, s.curr, rb);
+  const auto x = run(a, s.prev, s.curr, ra), y = run(b, s.prev, s.curr, rb);
   EXPECT_EQ(x.inliers, y.inliers);
   EXPECT_TRUE(x.T_prev_curr.isApprox(y.T_prev_curr, 0));
 }
@@ -106,23 +114,168 @@ TEST(Ransac, SameSeedSameAnswer) {
 TEST(Ransac, AllPointsOnALineIsDegenerate) {
   std::vector<Eigen::Vector3d> line;
   for (int i = 0; i < 50; ++i) line.emplace_back(0.05 * i, 0.02 * i, 1.0 + 0.01 * i);
-  RigidRansac ransac(paper_config(), SensorNoise{});
+  RigidRansac ransac(paper_config(), SensorNoise{}, 1000);
   Rng rng(1);
-  EXPECT_EQ(ransac.estimate(line, line, rng).status, Status::DegenerateSample);
+  EXPECT_EQ(run(ransac, line, line, rng).status, Status::DegenerateSample);
 }
 
 TEST(Ransac, PureNoiseHasTooFewInliers) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 100, 1.0, 0.0, 11);
-  RigidRansac ransac(paper_config(), SensorNoise{});
+  RigidRansac ransac(paper_config(), SensorNoise{}, 1000);
   Rng rng(1);
-  EXPECT_NE(ransac.estimate(s.prev, s.curr, rng).status, Status::Ok);
+  EXPECT_NE(run(ransac, s.prev, s.curr, rng).status, Status::Ok);
 }
 
 TEST(Ransac, FewerPairsThanMinimumFails) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 5, 0.0, 0.0, 13);
-  RigidRansac ransac(paper_config(), SensorNoise{});
+  RigidRansac ransac(paper_config(), SensorNoise{}, 1000);
   Rng rng(1);
-  EXPECT_EQ(ransac.estimate(s.prev, s.curr, rng).status, Status::RansacFailed);
+  EXPECT_EQ(run(ransac, s.prev, s.curr, rng).status, Status::RansacFailed);
+}
+
+}  // namespace
+}  // namespace rgbdo
+
+// ---------------------------------------------------------------------------------------
+// The allocation-free RANSAC against the first, straightforward version, same seeds.
+
+#include "rgbd_odometry/odometry.hpp"
+#include "rgbd_odometry/tum_sequence.hpp"
+#include "straightforward_ransac.hpp"
+
+namespace rgbdo {
+namespace {
+
+struct Agreement {
+  int cases = 0, same_inliers = 0;
+  double worst_translation = 0, worst_rotation = 0;
+  void add(const RansacResult& a, const StraightforwardResult& b) {
+    ++cases;
+    EXPECT_EQ(a.status, b.status);
+    same_inliers += a.inliers == b.inliers;
+    const Eigen::Isometry3d d = a.T_prev_curr.inverse() * b.T_prev_curr;
+    worst_translation = std::max(worst_translation, d.translation().norm());
+    worst_rotation = std::max(worst_rotation, rotation_angle(d.linear()));
+  }
+};
+
+TEST(RansacAgainstFirstVersion, SameAnswersOnRealFramesForTheSameSeed) {
+  // GIVEN the 3-D correspondences of the bundled frame pairs (real ORB matches)
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  OdometryPipeline pipeline(config);
+  const SensorNoise noise{config.covariance.depth_noise_coeff, config.covariance.pixel_sigma_px, config.camera.fx};
+  RigidRansac fast(config.ransac, noise, config.features.max_features);
+  StraightforwardRansac first(config.ransac, noise);
+  SymmetricMatcher matcher(config.matching.ratio);
+  ProcessedFrame prev, curr;
+  pipeline.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), prev);
+  Agreement agreement;
+  for (size_t i = 1; i < seq.frames.size(); ++i) {
+    pipeline.extract(load_tum_frame(seq.frames[i], 5000, 640, 480), curr);
+    std::vector<Match> matches;
+    matcher.match(prev.features.descriptors, curr.features.descriptors, matches);
+    PointPairs pairs;
+    build_point_pairs(matches, prev.geometry, prev.times, curr.geometry, curr.times, nullptr, pairs);
+    // WHEN both run from the same seed
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+      Rng ra(seed), rb(seed);
+      RansacResult a;
+      fast.estimate(pairs.prev, pairs.curr, ra, a);
+      agreement.add(a, first.estimate(pairs.prev, pairs.curr, rb));
+    }
+    std::swap(prev, curr);
+  }
+  // THEN they keep the same inliers and the same motion. The hypotheses differ in the last
+  // bits (closed-form triplet fit, float scoring), the refinement converges to one answer.
+  EXPECT_EQ(agreement.same_inliers, agreement.cases);
+  EXPECT_LT(agreement.worst_translation, 1e-9);
+  EXPECT_LT(agreement.worst_rotation, 1e-9);
+}
+
+TEST(RansacAgainstFirstVersion, SameAnswersOnSyntheticScenes) {
+  Agreement agreement;
+  for (unsigned scene_seed = 0; scene_seed < 30; ++scene_seed) {
+    Vector6d xi;
+    xi << 0.01 * (scene_seed % 5), -0.02, 0.01, 0.01, -0.005 * (scene_seed % 3), 0.01;
+    const Scene s = make_scene(transform_from_xi(xi), 300, 0.1 + 0.015 * scene_seed, 0.003, scene_seed);
+    RigidRansac fast(paper_config(), SensorNoise{}, 300);
+    StraightforwardRansac first(paper_config(), SensorNoise{});
+    Rng ra(scene_seed), rb(scene_seed);
+    RansacResult a;
+    fast.estimate(s.prev, s.curr, ra, a);
+    agreement.add(a, first.estimate(s.prev, s.curr, rb));
+  }
+  EXPECT_EQ(agreement.same_inliers, agreement.cases);
+  EXPECT_LT(agreement.worst_translation, 1e-9);
+  EXPECT_LT(agreement.worst_rotation, 1e-9);
+}
+
+TEST(Triplet, ClosedFormFitEqualsTheSvdFit) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> g(0, 0.003);
+  for (int trial = 0; trial < 200; ++trial) {
+    Vector6d xi;
+    xi << u(rng) * 0.1, u(rng) * 0.1, u(rng) * 0.1, u(rng) * 0.3, u(rng) * 0.3, u(rng) * 0.3;
+    const Eigen::Isometry3d T = transform_from_xi(xi);
+    Eigen::Vector3d s[3], d[3];
+    for (int i = 0; i < 3; ++i) {
+      s[i] = Eigen::Vector3d(u(rng), u(rng), 2 + u(rng));
+      d[i] = T * s[i] + Eigen::Vector3d(g(rng), g(rng), g(rng));  // noisy: not exactly rigid
+    }
+    Eigen::Isometry3d a, b;
+    ASSERT_TRUE(fit_triplet(s, d, a));
+    ASSERT_TRUE(fit_rigid(std::span<const Eigen::Vector3d>(s, 3), std::span<const Eigen::Vector3d>(d, 3), {}, b));
+    EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), 1e-9) << "trial " << trial;
+  }
+  Eigen::Vector3d line[3] = {{0, 0, 1}, {1, 0, 1}, {2, 0, 1}};
+  Eigen::Isometry3d T;
+  EXPECT_FALSE(fit_triplet(line, line, T));
+}
+
+}  // namespace
+}  // namespace rgbdo
+
+namespace rgbdo {
+namespace {
+
+TEST(ScoreKernels, EverySetIsBitExactWithTheReference) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-2, 2);
+  for (int n : {0, 1, 3, 7, 8, 9, 15, 16, 17, 100, 501}) {
+    std::vector<float> v[6];
+    for (auto& a : v)
+      for (int k = 0; k < n; ++k) a.push_back(u(rng));
+    simd::RigidScoreInput in;
+    in.n = n;
+    in.px = v[0].data(), in.py = v[1].data(), in.pz = v[2].data();
+    in.cx = v[3].data(), in.cy = v[4].data(), in.cz = v[5].data();
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    for (int e = 0; e < 9; ++e) in.r[e] = static_cast<float>(R(e / 3, e % 3));
+    in.t[0] = 0.1f, in.t[1] = -0.2f, in.t[2] = 0.05f;
+    in.threshold_sq = 2.0f;  // about half the random pairs fall inside
+    int ref_count = -1;
+    float ref_cost = -1;
+    simd::score_rigid_scalar(in, ref_count, ref_cost);
+    // The reference against the definition, in double.
+    int def_count = 0;
+    for (int k = 0; k < n; ++k) {
+      const Eigen::Vector3d p(v[0][static_cast<size_t>(k)], v[1][static_cast<size_t>(k)], v[2][static_cast<size_t>(k)]);
+      const Eigen::Vector3d c(v[3][static_cast<size_t>(k)], v[4][static_cast<size_t>(k)], v[5][static_cast<size_t>(k)]);
+      const Eigen::Vector3f rc = R.cast<float>() * c.cast<float>();
+      def_count += (p - (rc.cast<double>() + Eigen::Vector3d(0.1, -0.2, 0.05))).squaredNorm() < 2.0;
+    }
+    EXPECT_NEAR(ref_count, def_count, 1) << "n " << n;  // float vs double at the boundary
+    for (const auto& set : simd::compiled_kernel_sets()) {
+      if (!simd::cpu_supports(set)) continue;
+      int count = -1;
+      float cost = -1;
+      set.score_rigid(in, count, cost);
+      EXPECT_EQ(count, ref_count) << set.name << " n " << n;
+      EXPECT_EQ(cost, ref_cost) << set.name << " n " << n;
+    }
+  }
 }
 
 }  // namespace

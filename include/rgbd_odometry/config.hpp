@@ -46,6 +46,8 @@ struct RansacConfig {
   int max_iterations = 200;
   bool refine_threshold = true;  // threshold <- min(3 sigma_inliers, lambda_inlier)
   int min_inliers = 12;          // fewer than this and the pair is reported as failed
+  // Stop sampling once an all-inlier sample has been drawn with 99.9 % probability.
+  bool adaptive_stop = true;
 };
 
 struct CovarianceConfig {

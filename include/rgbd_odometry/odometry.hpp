@@ -70,6 +70,7 @@ class OdometryPipeline {
   cv::Mat mask_;
   std::vector<Match> matches_;
   PointPairs pairs_;
+  RansacResult fit_, refined_;
   std::vector<Eigen::Vector3d> inlier_prev_, inlier_curr_;
   ProcessedFrame prev_, curr_;
   bool have_prev_ = false;

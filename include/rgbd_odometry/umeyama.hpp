@@ -11,6 +11,14 @@ namespace rgbdo {
 [[nodiscard]] bool fit_rigid(std::span<const Eigen::Vector3d> src, std::span<const Eigen::Vector3d> dst,
                              std::span<const double> weights, Eigen::Isometry3d& T_dst_src);
 
+// The same least-squares fit for exactly three pairs, without an SVD: three points are
+// coplanar, so the optimal rotation turns the source triangle's normal onto the
+// destination's and then solves the 2-D Procrustes angle in that plane in closed form.
+// (Equal to fit_rigid up to rounding whenever the two triangles have the same orientation,
+// as they do for a true correspondence under a rotation; a mirrored pair, which no rotation
+// explains, is fitted with its normals aligned.) False for degenerate triangles.
+[[nodiscard]] bool fit_triplet(const Eigen::Vector3d src[3], const Eigen::Vector3d dst[3], Eigen::Isometry3d& T_dst_src);
+
 // The same fit from the weighted sums alone, sum_s = sum w s, sum_d = sum w d,
 // sum_ds = sum w d s^T, total = sum w: the small fixed-size solve (3x3 SVD, reflections
 // excluded) that the batched covariance runs once per perturbation.
