@@ -5,8 +5,11 @@
 namespace rgbdo {
 namespace {
 
-cv::Ptr<cv::Feature2D> create_feature2d(const std::string& name, int max_features) {
-  if (name == "ORB") return cv::ORB::create(max_features);
+cv::Ptr<cv::Feature2D> create_feature2d(const std::string& name, const FeatureConfig& c) {
+  const int max_features = c.max_features;
+  if (name == "ORB")
+    return cv::ORB::create(max_features, static_cast<float>(c.orb_scale_factor), c.orb_levels, 31, 0, 2,
+                           cv::ORB::HARRIS_SCORE, 31, c.fast_threshold);
   if (name == "AKAZE") return cv::AKAZE::create();
   if (name == "BRISK") return cv::BRISK::create();
   if (name == "SIFT") return cv::SIFT::create(max_features);
@@ -20,8 +23,8 @@ cv::Ptr<cv::Feature2D> create_feature2d(const std::string& name, int max_feature
 }  // namespace
 
 FeatureDetector::FeatureDetector(const FeatureConfig& config) {
-  detector_ = create_feature2d(config.detector, config.max_features);
-  descriptor_ = config.descriptor == config.detector ? detector_ : create_feature2d(config.descriptor, config.max_features);
+  detector_ = create_feature2d(config.detector, config);
+  descriptor_ = config.descriptor == config.detector ? detector_ : create_feature2d(config.descriptor, config);
   binary_ = descriptor_->defaultNorm() == cv::NORM_HAMMING;
 }
 

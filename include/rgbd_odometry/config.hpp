@@ -35,6 +35,10 @@ struct FeatureConfig {
   std::string descriptor = "ORB";
   int max_features = 1000;
   int border_px = 16;  // the image periphery dropped before detection (distortion is worst there)
+  // ORB's scale pyramid (OpenCV's defaults: 8 levels, factor 1.2) and FAST threshold.
+  int orb_levels = 8;
+  double orb_scale_factor = 1.2;
+  int fast_threshold = 20;
 };
 
 struct MatchConfig {
