@@ -6,6 +6,8 @@ install(FILES deploy/systemd/rgbd-odometry.service DESTINATION /lib/systemd/syst
 install(FILES deploy/udev/60-rgbd-odometry.rules DESTINATION /lib/udev/rules.d)
 install(FILES deploy/sysusers.conf DESTINATION /usr/lib/sysusers.d RENAME rgbd-odometry.conf)
 install(FILES deploy/config/tum-fr1.yaml deploy/config/xtion.yaml DESTINATION ${CMAKE_INSTALL_DATADIR}/rgbd-odometry/config)
+# The virtual sensor, where OpenNI2 looks for drivers: `--source openni://rgbdo-virtual:DIR`.
+install(TARGETS RgbdoVirtualSensor LIBRARY DESTINATION lib/${CMAKE_LIBRARY_ARCHITECTURE}/OpenNI2/Drivers)
 install(FILES README.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rgbd-odometry)
 
 set(CPACK_GENERATOR DEB)
@@ -23,7 +25,7 @@ endif()
 # Bookworm's runtime packages of what the binary links (dpkg-shlibdeps cannot run on a
 # cross build without the target's dpkg database).
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
-  "libc6 (>= 2.36), libstdc++6 (>= 12), libopencv-core406, libopencv-imgproc406, libopencv-imgcodecs406, libopencv-features2d406, libopencv-calib3d406, systemd")
+  "libc6 (>= 2.36), libstdc++6 (>= 12), libopencv-core406, libopencv-imgproc406, libopencv-imgcodecs406, libopencv-features2d406, libopencv-calib3d406, libopenni2-0, systemd")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
   "${CMAKE_CURRENT_SOURCE_DIR}/deploy/debian/conffiles;${CMAKE_CURRENT_SOURCE_DIR}/deploy/debian/postinst;${CMAKE_CURRENT_SOURCE_DIR}/deploy/debian/prerm;${CMAKE_CURRENT_SOURCE_DIR}/deploy/debian/postrm")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION TRUE)

@@ -1,5 +1,6 @@
 // rgbd-odometry: RGB-D visual odometry with covariance (Willis & Brink, PLANS 2016).
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <iostream>
 
 #include "rgbd_odometry/config.hpp"
@@ -22,6 +23,9 @@ int main(int argc, char** argv) {
         throw CLI::Success();
       },
       "list the SIMD kernel sets in this build and the one in use, then exit");
+  app.add_flag_callback(
+      "--list-devices", [] { throw CLI::RuntimeError(rgbdo::list_devices(std::cout)); },
+      "list the OpenNI2 devices present, then exit");
   app.add_option("--source", options.source, "frame source URI: tum:DIR (a TUM RGB-D sequence)")->required();
   app.add_option("--config", options.config_path, "YAML configuration (e.g. deploy/config/tum-fr1.yaml)")
       ->check(CLI::ExistingFile);
@@ -48,5 +52,8 @@ int main(int argc, char** argv) {
   if (!max_features.empty()) options.overrides.push_back("features.max_features=" + max_features);
   if (!scale.empty()) options.overrides.push_back("covariance.scale=" + scale);
   if (!seed.empty()) options.overrides.push_back("seed=" + seed);
+  // SIGINT / SIGTERM: finish the frame in hand, flush every output, print the summary.
+  std::signal(SIGINT, [](int) { rgbdo::request_stop(); });
+  std::signal(SIGTERM, [](int) { rgbdo::request_stop(); });
   return rgbdo::run_odometry(options, std::cout, std::cerr);
 }

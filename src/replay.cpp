@@ -1,5 +1,6 @@
 #include "rgbd_odometry/replay.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <iomanip>
 #include <memory>
@@ -11,10 +12,51 @@
 #include "rgbd_odometry/integrate.hpp"
 #include "rgbd_odometry/odometry.hpp"
 #include "rgbd_odometry/odometry_log.hpp"
+#include "rgbd_odometry/sensor_openni.hpp"
 #include "rgbd_odometry/tum_sequence.hpp"
 
 namespace rgbdo {
 namespace {
+
+std::atomic<bool> g_stop{false};
+
+// Where frames come from: a recorded TUM sequence or a live OpenNI2 device.
+class FrameFeed {
+ public:
+  virtual ~FrameFeed() = default;
+  // False at the end (or when the device stopped delivering: `problem` says why).
+  virtual bool next(RgbdFrame& frame, std::string& problem) = 0;
+  virtual const GroundTruth* groundtruth() const { return nullptr; }
+};
+
+class TumFeed : public FrameFeed {
+ public:
+  TumFeed(TumSequence sequence, const Config& config, int max_frames)
+      : seq_(std::move(sequence)), config_(config),
+        end_(max_frames > 0 ? std::min(seq_.frames.size(), static_cast<size_t>(max_frames)) : seq_.frames.size()) {}
+  bool next(RgbdFrame& frame, std::string&) override {
+    if (i_ >= end_) return false;
+    frame = load_tum_frame(seq_.frames[i_++], config_.depth.units_per_m, config_.camera.width, config_.camera.height);
+    return true;
+  }
+  const GroundTruth* groundtruth() const override { return &seq_.groundtruth; }
+  const TumSequence& sequence() const { return seq_; }
+
+ private:
+  TumSequence seq_;
+  Config config_;
+  size_t end_, i_ = 0;
+};
+
+class OpenNiFeed : public FrameFeed {
+ public:
+  explicit OpenNiFeed(const OpenNiOptions& options) : source_(options) {}
+  bool next(RgbdFrame& frame, std::string& problem) override { return source_.next(frame, problem); }
+  const OpenNiSource& source() const { return source_; }
+
+ private:
+  OpenNiSource source_;
+};
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
@@ -94,19 +136,31 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     return 2;
   }
 
-  const std::string scheme = "tum:";
-  if (options.source.rfind(scheme, 0) != 0) {
-    err << "rgbd-odometry: unsupported source '" << options.source
-        << "': expected tum:DIR (a TUM RGB-D sequence directory)\n";
-    return 2;
-  }
-  TumSequence sequence;
+  const std::string tum_scheme = "tum:", openni_scheme = "openni://";
+  std::unique_ptr<FrameFeed> feed;
   try {
-    sequence = open_tum_sequence(options.source.substr(scheme.size()));
+    if (options.source.rfind(tum_scheme, 0) == 0) {
+      feed = std::make_unique<TumFeed>(open_tum_sequence(options.source.substr(tum_scheme.size())), config,
+                                       options.max_frames);
+    } else if (options.source.rfind(openni_scheme, 0) == 0) {
+      OpenNiOptions o;
+      o.uri = options.source.substr(openni_scheme.size());
+      o.width = config.camera.width;
+      o.height = config.camera.height;
+      auto live = std::make_unique<OpenNiFeed>(o);
+      err << "rgbd-odometry: reading " << live->source().description() << "\n";
+      feed = std::move(live);
+    } else {
+      err << "rgbd-odometry: unsupported source '" << options.source
+          << "': expected tum:DIR (a TUM RGB-D sequence directory) or openni://[DEVICE-URI]\n";
+      return 2;
+    }
   } catch (const SourceError& e) {
     err << "rgbd-odometry: cannot open source: " << e.what() << "\n";
     return 1;
   }
+  static const GroundTruth kNoGroundTruth;
+  const GroundTruth& groundtruth = feed->groundtruth() ? *feed->groundtruth() : kNoGroundTruth;
 
   std::unique_ptr<OdometryCsvWriter> log;
   std::unique_ptr<TrajectoryWriter> trajectory;
@@ -119,8 +173,9 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   }
 
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
-  if (options.start_at_groundtruth && !sequence.frames.empty()) {
-    const auto gt = sequence.groundtruth.at(sequence.frames.front().t_colour_ns);
+  const auto* tum = dynamic_cast<const TumFeed*>(feed.get());
+  if (options.start_at_groundtruth && tum && !tum->sequence().frames.empty()) {
+    const auto gt = groundtruth.at(tum->sequence().frames.front().t_colour_ns);
     if (!gt) {
       err << "rgbd-odometry: --start-at-groundtruth: no ground truth at the first frame\n";
       return 1;
@@ -130,15 +185,18 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
 
   OdometryPipeline pipeline(config);
   TrajectoryIntegrator integrator(origin);
-  AccuracyEvaluator evaluator(sequence.groundtruth, config.covariance.scale);
+  AccuracyEvaluator evaluator(groundtruth, config.covariance.scale);
   StageTimes total;
   int timed_pairs = 0;
-  size_t frames = sequence.frames.size();
-  if (options.max_frames > 0) frames = std::min(frames, static_cast<size_t>(options.max_frames));
+  g_stop = false;
   try {
-    for (size_t i = 0; i < frames; ++i) {
-      const RgbdFrame frame = load_tum_frame(sequence.frames[i], config.depth.units_per_m, config.camera.width,
-                                             config.camera.height);
+    RgbdFrame frame;
+    std::string problem;
+    for (size_t i = 0; !g_stop; ++i) {
+      if (!feed->next(frame, problem)) {
+        if (!problem.empty()) err << "rgbd-odometry: source stopped: " << problem << "\n";
+        break;
+      }
       if (frame.status != Status::Ok) err << "rgbd-odometry: frame " << i << ": " << frame.problem << "\n";
       const auto result = pipeline.process(frame);
       if (!result) {
@@ -165,6 +223,27 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs);
   return 0;
+}
+
+void request_stop() { g_stop = true; }
+
+int list_devices(std::ostream& out) {
+  try {
+    const auto devices = list_openni_devices();
+    if (devices.empty()) {
+      out << "no OpenNI2 device found (is the sensor plugged in, and is its USB port powered?)\n";
+      return 0;
+    }
+    for (const auto& d : devices) {
+      char ids[32];
+      std::snprintf(ids, sizeof ids, "%04x:%04x", d.usb_vendor_id, d.usb_product_id);
+      out << d.uri << "  " << d.vendor << " " << d.name << "  usb " << ids << "\n";
+    }
+    return 0;
+  } catch (const SourceError& e) {
+    out << "cannot list OpenNI2 devices: " << e.what() << "\n";
+    return 1;
+  }
 }
 
 }  // namespace rgbdo

@@ -140,9 +140,12 @@ RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int e
     f.depth_m.release();
     return f;
   };
+  // Decoded in colour and converted by OpenCV, exactly as frames from a live RGB sensor are
+  // (libpng's own grey conversion differs in many pixels): replay and live agree.
   cv::Mat colour;
   try {
-    colour = cv::imread(ref.colour_path, cv::IMREAD_GRAYSCALE);
+    colour = cv::imread(ref.colour_path, cv::IMREAD_COLOR);
+    if (!colour.empty()) cv::cvtColor(colour, colour, cv::COLOR_BGR2GRAY);
   } catch (const cv::Exception& e) {
     return fail(Status::BadFrame, "cannot decode colour image '" + ref.colour_path + "': " + e.what());
   }

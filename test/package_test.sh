@@ -33,6 +33,9 @@ expect_file lib/udev/rules.d/60-rgbd-odometry.rules 644
 expect_file usr/lib/sysusers.d/rgbd-odometry.conf 644
 expect_file usr/share/rgbd-odometry/config/tum-fr1.yaml 644
 expect_file usr/share/doc/rgbd-odometry/README.md 644
+driver=$(find "$root/usr/lib" -path '*/OpenNI2/Drivers/libRgbdoVirtualSensor.so.0' | head -n 1)
+[ -n "$driver" ] || fail "the virtual sensor driver is not in an OpenNI2/Drivers directory"
+dpkg-deb -f "$deb" Depends | grep -q libopenni2-0 || fail "Depends lacks the OpenNI2 runtime"
 for s in postinst prerm postrm; do expect_file "DEBIAN/$s" 755; done
 grep -qx /etc/rgbd-odometry/rgbd-odometry.yaml "$root/DEBIAN/conffiles" || fail "config is not a conffile"
 grep -qx /etc/default/rgbd-odometry "$root/DEBIAN/conffiles" || fail "/etc/default file is not a conffile"

@@ -8,7 +8,7 @@
 namespace rgbdo {
 
 struct RunOptions {
-  std::string source;       // "tum:DIR"
+  std::string source;       // "tum:DIR" or "openni://[DEVICE-URI]" (empty: the first device)
   std::string config_path;  // empty: built-in defaults
   std::vector<std::string> overrides;  // "section.key=value", applied after the file
   std::string log_path;         // odometry CSV, empty: none
@@ -20,6 +20,13 @@ struct RunOptions {
 };
 
 // Returns the process exit code: 0 ok, 1 input/output failure, 2 bad configuration.
+// A live source runs until it stops delivering or request_stop() is called.
 int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// Asks a running run_odometry to finish the current frame, flush and return (signal-safe).
+void request_stop();
+
+// Prints the OpenNI2 devices present; returns the exit code.
+int list_devices(std::ostream& out);
 
 }  // namespace rgbdo

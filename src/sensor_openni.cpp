@@ -1,0 +1,208 @@
+#include "rgbd_odometry/sensor_openni.hpp"
+
+#include <OpenNI.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "rgbd_odometry/tum_sequence.hpp"  // SourceError
+
+namespace rgbdo {
+namespace {
+
+constexpr std::int64_t kMaxColourDepthOffsetNs = 20'000'000;
+constexpr int kDepthHistory = 4;  // depth frames kept for pairing (~130 ms at 30 Hz)
+
+std::int64_t host_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+void initialise_openni() {
+  if (openni::OpenNI::initialize() != openni::STATUS_OK)
+    throw SourceError(std::string("OpenNI2 could not be initialised: ") + openni::OpenNI::getExtendedError());
+}
+
+std::string mode_text(const openni::VideoMode& m) {
+  std::ostringstream s;
+  s << m.getResolutionX() << "x" << m.getResolutionY() << "@" << m.getFps() << " format " << m.getPixelFormat();
+  return s.str();
+}
+
+// The device's mode with the requested size and rate, in the first acceptable pixel format.
+openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int fps,
+                              std::initializer_list<openni::PixelFormat> formats, const char* what) {
+  const auto& modes = info.getSupportedVideoModes();
+  for (const auto format : formats)
+    for (int i = 0; i < modes.getSize(); ++i)
+      if (modes[i].getResolutionX() == w && modes[i].getResolutionY() == h && modes[i].getFps() == fps &&
+          modes[i].getPixelFormat() == format)
+        return modes[i];
+  std::ostringstream s;
+  s << "the device offers no " << what << " mode " << w << "x" << h << "@" << fps << "; it offers:";
+  for (int i = 0; i < modes.getSize(); ++i) s << " " << mode_text(modes[i]);
+  throw SourceError(s.str());
+}
+
+}  // namespace
+
+struct OpenNiSource::Impl {
+  OpenNiOptions options;
+  openni::Device device;
+  openni::VideoStream colour, depth;
+  double depth_m_per_unit = 0.001;
+  // Device microseconds -> host nanoseconds with one offset, measured at the first frame: the
+  // intervals stay exactly the device's (odometry divides by them); the host times carry a
+  // constant bias, the first frame's transport delay. (Refining the offset would shift the
+  // interval it happens in, which the timing compensation would feel.)
+  bool have_offset = false;
+  std::int64_t offset_ns = 0;
+  struct DepthSlot {
+    std::int64_t t_ns = 0;
+    cv::Mat depth_m;
+  };
+  std::array<DepthSlot, kDepthHistory> depth_history;
+  int depth_count = 0;
+  int last_colour_index = -1;
+  int dropped = 0;
+
+  std::int64_t to_host(std::uint64_t device_us) {
+    const std::int64_t device_ns = static_cast<std::int64_t>(device_us) * 1000;
+    if (!have_offset) offset_ns = host_now_ns() - device_ns;
+    have_offset = true;
+    return device_ns + offset_ns;
+  }
+};
+
+std::vector<DeviceDescription> list_openni_devices() {
+  initialise_openni();
+  openni::Array<openni::DeviceInfo> infos;
+  openni::OpenNI::enumerateDevices(&infos);
+  std::vector<DeviceDescription> out;
+  for (int i = 0; i < infos.getSize(); ++i)
+    out.push_back({infos[i].getUri(), infos[i].getVendor(), infos[i].getName(),
+                   static_cast<std::uint16_t>(infos[i].getUsbVendorId()),
+                   static_cast<std::uint16_t>(infos[i].getUsbProductId())});
+  return out;
+}
+
+OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_unique<Impl>()) {
+  auto& s = *impl_;
+  s.options = options;
+  initialise_openni();
+  const char* uri = options.uri.empty() ? openni::ANY_DEVICE : options.uri.c_str();
+  if (s.device.open(uri) != openni::STATUS_OK)
+    throw SourceError("cannot open OpenNI2 device '" + (options.uri.empty() ? std::string("(first found)") : options.uri) +
+                      "': " + openni::OpenNI::getExtendedError());
+  const openni::SensorInfo* colour_info = s.device.getSensorInfo(openni::SENSOR_COLOR);
+  const openni::SensorInfo* depth_info = s.device.getSensorInfo(openni::SENSOR_DEPTH);
+  if (!colour_info || !depth_info) throw SourceError("the OpenNI2 device has no colour or no depth sensor");
+  const auto colour_mode =
+      choose_mode(*colour_info, options.width, options.height, options.fps, {openni::PIXEL_FORMAT_RGB888}, "colour");
+  const auto depth_mode = choose_mode(*depth_info, options.width, options.height, options.fps,
+                                      {openni::PIXEL_FORMAT_DEPTH_100_UM, openni::PIXEL_FORMAT_DEPTH_1_MM}, "depth");
+  s.depth_m_per_unit = depth_mode.getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM ? 1e-4 : 1e-3;
+
+  if (s.colour.create(s.device, openni::SENSOR_COLOR) != openni::STATUS_OK ||
+      s.depth.create(s.device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
+    throw SourceError(std::string("cannot create the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
+  if (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK)
+    throw SourceError(std::string("the device refused the video modes: ") + openni::OpenNI::getExtendedError());
+  if (options.registration) {
+    if (!s.device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ||
+        s.device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) != openni::STATUS_OK)
+      throw SourceError("the device cannot register depth to colour in hardware");
+  }
+  // Frame sync where the driver offers it; pairing by timestamp below works either way.
+  (void)s.device.setDepthColorSyncEnabled(true);
+  (void)s.colour.setMirroringEnabled(false);
+  (void)s.depth.setMirroringEnabled(false);
+  if (s.colour.start() != openni::STATUS_OK || s.depth.start() != openni::STATUS_OK)
+    throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
+  for (auto& slot : s.depth_history) slot.depth_m.create(options.height, options.width, CV_32FC1);
+}
+
+OpenNiSource::~OpenNiSource() {
+  impl_->colour.stop();
+  impl_->depth.stop();
+  impl_->colour.destroy();
+  impl_->depth.destroy();
+  impl_->device.close();
+}
+
+int OpenNiSource::dropped_colour_frames() const { return impl_->dropped; }
+
+std::string OpenNiSource::description() const {
+  const auto& s = *impl_;
+  std::ostringstream d;
+  d << s.device.getDeviceInfo().getVendor() << " " << s.device.getDeviceInfo().getName() << " ("
+    << s.device.getDeviceInfo().getUri() << "), colour " << mode_text(s.colour.getVideoMode()) << ", depth "
+    << mode_text(s.depth.getVideoMode());
+  return d.str();
+}
+
+bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
+  auto& s = *impl_;
+  openni::VideoStream* streams[] = {&s.colour, &s.depth};
+  openni::VideoFrameRef frame;
+  const auto kept = [&] { return std::min(s.depth_count, kDepthHistory); };
+  const auto depth_at_or_after = [&](std::int64_t t) {
+    for (int k = 0; k < kept(); ++k)
+      if (s.depth_history[static_cast<size_t>(k)].t_ns >= t) return true;
+    return false;
+  };
+  bool have_colour = false;
+  std::int64_t colour_t = 0;
+  // Collect until a colour frame is in hand and a depth frame at or after it has arrived
+  // (the nearest depth can come up to 17 ms after its colour frame), or the wait runs out.
+  while (!(have_colour && depth_at_or_after(colour_t))) {
+    int ready = -1;
+    const int timeout = have_colour ? s.options.pairing_wait_ms : s.options.frame_timeout_ms;
+    if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, timeout) != openni::STATUS_OK) {
+      if (have_colour) break;  // no later depth: pair with what there is
+      problem = "no frame from the sensor for " + std::to_string(s.options.frame_timeout_ms) + " ms (unplugged?)";
+      return false;
+    }
+    if (streams[ready]->readFrame(&frame) != openni::STATUS_OK) continue;
+    const std::int64_t t = s.to_host(frame.getTimestamp());
+    if (ready == 1) {
+      auto& slot = s.depth_history[static_cast<size_t>(s.depth_count++ % kDepthHistory)];
+      slot.t_ns = t;
+      const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
+                        static_cast<size_t>(frame.getStrideInBytes()));
+      raw.convertTo(slot.depth_m, CV_32F, s.depth_m_per_unit);
+      continue;
+    }
+    const int index = frame.getFrameIndex();
+    if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
+    s.last_colour_index = index;
+    const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
+                      static_cast<size_t>(frame.getStrideInBytes()));
+    cv::cvtColor(rgb, out.gray, cv::COLOR_RGB2GRAY);
+    have_colour = true;
+    colour_t = t;
+  }
+  out.t_colour_ns = colour_t;
+  out.status = Status::Ok;
+  out.problem.clear();
+  const Impl::DepthSlot* best = nullptr;
+  for (int k = 0; k < kept(); ++k) {
+    const auto& slot = s.depth_history[static_cast<size_t>(k)];
+    if (!best || std::llabs(slot.t_ns - colour_t) < std::llabs(best->t_ns - colour_t)) best = &slot;
+  }
+  if (!best || std::llabs(best->t_ns - colour_t) > kMaxColourDepthOffsetNs) {
+    out.t_depth_ns = colour_t;
+    out.status = Status::NoDepth;
+    out.problem = "no depth frame within 20 ms of the colour frame";
+    out.depth_m.release();
+    return true;
+  }
+  out.t_depth_ns = best->t_ns;
+  best->depth_m.copyTo(out.depth_m);
+  return true;
+}
+
+}  // namespace rgbdo
