@@ -1,5 +1,7 @@
 #include "rgbd_odometry/match.hpp"
 
+#include "nearest_two_reference.hpp"
+
 #include <cmath>
 #include <cstring>
 
@@ -11,15 +13,7 @@ namespace {
 void nearest_two_l2(const cv::Mat& q, const cv::Mat& t, simd::NearestTwo* q_out, simd::NearestTwo* t_out) {
   for (int i = 0; i < q.rows; ++i) q_out[i] = {};
   for (int j = 0; j < t.rows; ++j) t_out[j] = {};
-  const auto update = [](simd::NearestTwo& n, std::uint32_t d, int index) {
-    if (d < n.best) {
-      n.second = n.best;
-      n.best = d;
-      n.best_index = index;
-    } else if (d < n.second) {
-      n.second = d;
-    }
-  };
+  using simd::reference::update;  // the same best/second rule as every Hamming kernel
   for (int i = 0; i < q.rows; ++i) {
     const float* a = q.ptr<float>(i);
     for (int j = 0; j < t.rows; ++j) {
