@@ -40,6 +40,7 @@ PerturbationCovariance::PerturbationCovariance(const CovarianceConfig& config, i
 void PerturbationCovariance::reserve(int points) {
   for (auto* v : {&sx_, &sy_, &sz_, &dx_, &dy_, &dz_, &ssx_, &ssy_, &ssz_, &sdx_, &sdy_, &sdz_, &w_})
     v->reserve(static_cast<size_t>(points));
+  weights_.reserve(static_cast<size_t>(points));
 }
 
 bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
@@ -51,17 +52,19 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
 
   // Centre both clouds on their weighted centroids (in double) so that the float sums hold
   // small numbers and the per-perturbation cross-covariance loses no precision.
+  for (auto* v : {&sx_, &sy_, &sz_, &dx_, &dy_, &dz_, &ssx_, &ssy_, &ssz_, &sdx_, &sdy_, &sdz_, &w_}) v->resize(n);
+  weights_.resize(n);
   double total = 0;
   Eigen::Vector3d centre_s = Eigen::Vector3d::Zero(), centre_d = Eigen::Vector3d::Zero();
   for (size_t k = 0; k < n; ++k) {
-    const double w = pair_weight(prev[k], curr[k], c);
+    const double w = pair_weight(prev[k], curr[k], c);  // the same weights as the fit's
+    weights_[k] = w;
     total += w;
     centre_s += w * curr[k];
     centre_d += w * prev[k];
   }
   centre_s /= total;
   centre_d /= total;
-  for (auto* v : {&sx_, &sy_, &sz_, &dx_, &dy_, &dz_, &ssx_, &ssy_, &ssz_, &sdx_, &sdy_, &sdz_, &w_}) v->resize(n);
   for (size_t k = 0; k < n; ++k) {
     const Eigen::Vector3d s = curr[k] - centre_s, d = prev[k] - centre_d;
     const Eigen::Vector3d sigma_s = point_sigma(curr[k], c), sigma_d = point_sigma(prev[k], c);
@@ -77,7 +80,7 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
     sdx_[k] = static_cast<float>(sigma_d.x());
     sdy_[k] = static_cast<float>(sigma_d.y());
     sdz_[k] = static_cast<float>(sigma_d.z());
-    w_[k] = static_cast<float>(pair_weight(prev[k], curr[k], c) / total);  // the same weights as the fit's
+    w_[k] = static_cast<float>(weights_[k] / total);
   }
 
   simd::PerturbationInput in;

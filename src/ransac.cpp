@@ -112,7 +112,7 @@ void RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::
     result.status = Status::DegenerateSample;
     return;
   }
-  refine_loaded(prev, curr, best, result);
+  refine(prev, curr, best, result);
   result.hypotheses = hypotheses;
 }
 
@@ -172,11 +172,6 @@ int RigidRansac::sample_hypotheses(const std::vector<Eigen::Vector3d>& prev, con
 
 void RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                          const Eigen::Isometry3d& initial, RansacResult& result) {
-  refine_loaded(prev, curr, initial, result);
-}
-
-void RigidRansac::refine_loaded(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                const Eigen::Isometry3d& initial, RansacResult& result) {
   result.T_prev_curr = initial;
   result.hypotheses = 0;
   double threshold = config_.inlier_threshold_m;

@@ -50,6 +50,7 @@ class PerturbationCovariance {
   int padded_perturbations_;
   // Structure of arrays of the centred clouds, their sigmas and the normalised weights.
   std::vector<float> sx_, sy_, sz_, dx_, dy_, dz_, ssx_, ssy_, ssz_, sdx_, sdy_, sdz_, w_;
+  std::vector<double> weights_;  // the fit's weights before normalisation
   std::vector<float> sums_;  // 15 arrays of padded_perturbations_
   std::vector<Vector6d> samples_;
 };

@@ -49,8 +49,6 @@ class RigidRansac {
 
  private:
   void load(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr);  // into the SoA
-  void refine_loaded(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                     const Eigen::Isometry3d& initial, RansacResult& out);
   bool sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                             const int* idx) const;
   void select_inliers(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
