@@ -59,6 +59,15 @@ std::vector<Param> param_table(Config& c) {
       {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100},
       {"covariance.residual_variance_factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},
+      {"sensor.fps", &c.sensor.fps, 1, 120},
+      {"sensor.registration", &c.sensor.registration},
+      {"sensor.frame_timeout_ms", &c.sensor.frame_timeout_ms, 100, 600000},
+      {"sensor.pairing_wait_ms", &c.sensor.pairing_wait_ms, 0, 10000},
+      {"sensor.reconnect_timeout_s", &c.sensor.reconnect_timeout_s, -1, 1e9},
+      {"sensor.reconnect_interval_ms", &c.sensor.reconnect_interval_ms, 10, 600000},
+      {"sensor.record_oni", &c.sensor.record_oni},
+      {"runtime.processing_threads", &c.runtime.processing_threads, 1, 2},
+      {"runtime.cpu_affinity", &c.runtime.cpu_affinity},
       {"seed", &c.seed, 0, 1.8e19},
   };
 }
@@ -294,6 +303,21 @@ void validate(const Config& config) {
                       " descriptors need the matching (A)KAZE detector");
   if (c.ransac.min_inliers < 3)
     throw ConfigError("config key 'ransac.min_inliers': a rigid motion needs at least 3");
+  (void)parse_cpu_list(c.runtime.cpu_affinity);
+}
+
+std::vector<int> parse_cpu_list(const std::string& text) {
+  std::vector<int> cpus;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    int cpu = -1;
+    const char* end = item.data() + item.size();
+    auto [ptr, ec] = std::from_chars(item.data(), end, cpu);
+    if (ec != std::errc() || ptr != end || cpu < 0 || cpu > 1023)
+      throw ConfigError("config key 'runtime.cpu_affinity': expected CPU numbers like \"4,5,6,7\", got '" + text + "'");
+    cpus.push_back(cpu);
+  }
+  return cpus;
 }
 
 }  // namespace rgbdo

@@ -49,6 +49,7 @@ OdometryPipeline::OdometryPipeline(const Config& config)
 void OdometryPipeline::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.times = {frame.t_colour_ns, frame.t_depth_ns};
   out.status = frame.status;
+  out.problem = frame.problem;  // empty for good frames: no allocation
   out.features.keypoints.clear();
   out.geometry.clear();
   if (frame.status != Status::Ok) return;

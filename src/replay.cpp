@@ -12,6 +12,8 @@
 #include "rgbd_odometry/integrate.hpp"
 #include "rgbd_odometry/odometry.hpp"
 #include "rgbd_odometry/odometry_log.hpp"
+#include "rgbd_odometry/frame_feed.hpp"
+#include "rgbd_odometry/realtime.hpp"
 #include "rgbd_odometry/sensor_openni.hpp"
 #include "rgbd_odometry/tum_sequence.hpp"
 
@@ -19,44 +21,6 @@ namespace rgbdo {
 namespace {
 
 std::atomic<bool> g_stop{false};
-
-// Where frames come from: a recorded TUM sequence or a live OpenNI2 device.
-class FrameFeed {
- public:
-  virtual ~FrameFeed() = default;
-  // False at the end (or when the device stopped delivering: `problem` says why).
-  virtual bool next(RgbdFrame& frame, std::string& problem) = 0;
-  virtual const GroundTruth* groundtruth() const { return nullptr; }
-};
-
-class TumFeed : public FrameFeed {
- public:
-  TumFeed(TumSequence sequence, const Config& config, int max_frames)
-      : seq_(std::move(sequence)), config_(config),
-        end_(max_frames > 0 ? std::min(seq_.frames.size(), static_cast<size_t>(max_frames)) : seq_.frames.size()) {}
-  bool next(RgbdFrame& frame, std::string&) override {
-    if (i_ >= end_) return false;
-    frame = load_tum_frame(seq_.frames[i_++], config_.depth.units_per_m, config_.camera.width, config_.camera.height);
-    return true;
-  }
-  const GroundTruth* groundtruth() const override { return &seq_.groundtruth; }
-  const TumSequence& sequence() const { return seq_; }
-
- private:
-  TumSequence seq_;
-  Config config_;
-  size_t end_, i_ = 0;
-};
-
-class OpenNiFeed : public FrameFeed {
- public:
-  explicit OpenNiFeed(const OpenNiOptions& options) : source_(options) {}
-  bool next(RgbdFrame& frame, std::string& problem) override { return source_.next(frame, problem); }
-  const OpenNiSource& source() const { return source_; }
-
- private:
-  OpenNiSource source_;
-};
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
@@ -93,10 +57,17 @@ void print_stats(std::ostream& out, const char* name, const ErrorStats& s, doubl
 }
 
 void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const StageTimes& total,
-                   int timed_pairs) {
+                   int timed_pairs, const RealtimeStats& run) {
   out << "summary: " << s.pairs << " pairs, " << s.pairs - s.failed << " ok, " << s.failed << " failed";
   for (const auto& [word, n] : s.failures) out << " (" << word << ": " << n << ")";
   out << "\n";
+  out << "  frames: " << run.frames << " processed, " << run.skipped << " skipped (processing behind), "
+      << run.dropped_by_sensor << " dropped by the sensor; sensor lost " << run.sensor_losses << " times, re-opened "
+      << run.reopens << " times\n";
+  if (run.latency.count() > 0)
+    out << std::fixed << std::setprecision(2) << "  latency capture to output: median " << run.latency.quantile_ms(0.5)
+        << " ms, p99 " << run.latency.quantile_ms(0.99) << " ms, max " << run.latency.max_ms() << " ms ("
+        << run.latency.count() << " pairs)\n";
   if (timed_pairs > 0) {
     const double n = timed_pairs;
     const double frame_ms = (total.detect_ms + total.match_ms + total.backproject_ms + total.ransac_ms +
@@ -136,29 +107,38 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     return 2;
   }
 
-  const std::string tum_scheme = "tum:", openni_scheme = "openni://";
+  const std::string tum_scheme = "tum:", openni_scheme = "openni://", oni_scheme = "oni:";
   std::unique_ptr<FrameFeed> feed;
   try {
     if (options.source.rfind(tum_scheme, 0) == 0) {
       feed = std::make_unique<TumFeed>(open_tum_sequence(options.source.substr(tum_scheme.size())), config,
                                        options.max_frames);
-    } else if (options.source.rfind(openni_scheme, 0) == 0) {
+    } else if (options.source.rfind(openni_scheme, 0) == 0 || options.source.rfind(oni_scheme, 0) == 0) {
+      const bool file = options.source.rfind(oni_scheme, 0) == 0;
       OpenNiOptions o;
-      o.uri = options.source.substr(openni_scheme.size());
+      o.uri = options.source.substr(file ? oni_scheme.size() : openni_scheme.size());
+      if (file && (o.uri.size() < 5 || o.uri.compare(o.uri.size() - 4, 4, ".oni") != 0)) {
+        err << "rgbd-odometry: oni:FILE needs a file ending in .oni, got '" << o.uri << "'\n";
+        return 2;
+      }
       o.width = config.camera.width;
       o.height = config.camera.height;
-      auto live = std::make_unique<OpenNiFeed>(o);
-      err << "rgbd-odometry: reading " << live->source().description() << "\n";
-      feed = std::move(live);
+      o.fps = config.sensor.fps;
+      o.registration = config.sensor.registration;
+      o.frame_timeout_ms = config.sensor.frame_timeout_ms;
+      o.pairing_wait_ms = config.sensor.pairing_wait_ms;
+      o.record_path = config.sensor.record_oni;
+      feed = std::make_unique<OpenNiFeed>(o, options.max_frames);
     } else {
       err << "rgbd-odometry: unsupported source '" << options.source
-          << "': expected tum:DIR (a TUM RGB-D sequence directory) or openni://[DEVICE-URI]\n";
+          << "': expected tum:DIR (a TUM RGB-D sequence directory), openni://[DEVICE-URI] or oni:FILE.oni\n";
       return 2;
     }
   } catch (const SourceError& e) {
     err << "rgbd-odometry: cannot open source: " << e.what() << "\n";
     return 1;
   }
+  if (feed->live()) err << "rgbd-odometry: reading " << feed->description() << "\n";
   static const GroundTruth kNoGroundTruth;
   const GroundTruth& groundtruth = feed->groundtruth() ? *feed->groundtruth() : kNoGroundTruth;
 
@@ -183,45 +163,65 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     origin = *gt;
   }
 
-  OdometryPipeline pipeline(config);
   TrajectoryIntegrator integrator(origin);
   AccuracyEvaluator evaluator(groundtruth, config.covariance.scale);
   StageTimes total;
   int timed_pairs = 0;
-  g_stop = false;
-  try {
-    RgbdFrame frame;
-    std::string problem;
-    for (size_t i = 0; !g_stop; ++i) {
-      if (!feed->next(frame, problem)) {
-        if (!problem.empty()) err << "rgbd-odometry: source stopped: " << problem << "\n";
-        break;
+  size_t pair_count = 0;
+  std::string output_error;
+  // Runs on the pipeline's output thread, one frame at a time, in capture order.
+  const auto on_output = [&](const PairOutput& item) {
+    if (!output_error.empty()) return;
+    try {
+      if (!item.frame_problem.empty()) err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns) << ": " << item.frame_problem << "\n";
+      if (!item.has_pair) {
+        if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
+        return;
       }
-      if (frame.status != Status::Ok) err << "rgbd-odometry: frame " << i << ": " << frame.problem << "\n";
-      const auto result = pipeline.process(frame);
-      if (!result) {
-        if (trajectory) trajectory->write(frame.t_colour_ns, integrator.pose());
-        continue;
-      }
-      if (result->status == Status::Ok) {
-        integrator.add(result->T_prev_curr);
-        total.detect_ms += result->times.detect_ms;
-        total.match_ms += result->times.match_ms;
-        total.backproject_ms += result->times.backproject_ms;
-        total.ransac_ms += result->times.ransac_ms;
-        total.covariance_ms += result->times.covariance_ms;
+      const PairResult& r = item.result;
+      if (r.status == Status::Ok) {
+        integrator.add(r.T_prev_curr);
+        total.detect_ms += r.times.detect_ms;
+        total.match_ms += r.times.match_ms;
+        total.backproject_ms += r.times.backproject_ms;
+        total.ransac_ms += r.times.ransac_ms;
+        total.covariance_ms += r.times.covariance_ms;
         ++timed_pairs;
       }
-      if (log) log->write(*result);
-      if (trajectory) trajectory->write(frame.t_colour_ns, integrator.pose());
-      evaluator.add(*result, origin.inverse() * integrator.pose());
-      if (!options.quiet) out << pair_line(*result, i - 1, options.verbose) << "\n";
+      if (log) log->write(r);
+      if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
+      evaluator.add(r, origin.inverse() * integrator.pose());
+      ++pair_count;
+      if (!options.quiet) {
+        out << pair_line(r, pair_count - 1, options.verbose);
+        if (item.skipped > 0) out << "  (" << item.skipped << " frames skipped)";
+        if (options.verbose) out << std::fixed << std::setprecision(1) << " | latency " << item.latency_ms << " ms";
+        out << "\n";
+      }
+    } catch (const std::exception& e) {
+      output_error = e.what();  // reported once the run has stopped
+      g_stop = true;
     }
+  };
+  const auto on_message = [&](const std::string& text) { err << "rgbd-odometry: " << text << "\n" << std::flush; };
+
+  g_stop = false;
+  RealtimeStats run;
+  try {
+    RealtimePipeline pipeline(config, *feed, on_output, on_message);
+    run = pipeline.run(g_stop);
+  } catch (const ConfigError& e) {
+    err << "rgbd-odometry: configuration error: " << e.what() << "\n";
+    return 2;
   } catch (const std::exception& e) {
     err << "rgbd-odometry: " << e.what() << "\n";
     return 1;
   }
-  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs);
+  if (!output_error.empty()) {
+    err << "rgbd-odometry: " << output_error << "\n";
+    return 1;
+  }
+  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, run);
   return 0;
 }
 

@@ -3,6 +3,7 @@
 #include <OpenNI.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -15,6 +16,9 @@ namespace {
 
 constexpr std::int64_t kMaxColourDepthOffsetNs = 20'000'000;
 constexpr int kDepthHistory = 4;  // depth frames kept for pairing (~130 ms at 30 Hz)
+// Waits are cut into slices this long so that interrupt() and an unplug are noticed promptly
+// (the program must stop within a second of SIGINT whatever the sensor does).
+constexpr int kWaitSliceMs = 50;
 
 std::int64_t host_now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
@@ -49,10 +53,13 @@ openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int 
 
 }  // namespace
 
-struct OpenNiSource::Impl {
+struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   OpenNiOptions options;
+  std::string uri;  // of the open device, as the runtime names it
+  std::atomic<bool> interrupted{false}, unplugged{false};
   openni::Device device;
   openni::VideoStream colour, depth;
+  openni::Recorder recorder;
   double depth_m_per_unit = 0.001;
   // Device microseconds -> host nanoseconds with one offset, measured at the first frame: the
   // intervals stay exactly the device's (odometry divides by them); the host times carry a
@@ -68,6 +75,11 @@ struct OpenNiSource::Impl {
   int depth_count = 0;
   int last_colour_index = -1;
   int dropped = 0;
+
+  // Called on an OpenNI2 thread when any device goes away.
+  void onDeviceDisconnected(const openni::DeviceInfo* info) override {
+    if (info && uri == info->getUri()) unplugged = true;
+  }
 
   std::int64_t to_host(std::uint64_t device_us) {
     const std::int64_t device_ns = static_cast<std::int64_t>(device_us) * 1000;
@@ -111,7 +123,13 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
     throw SourceError(std::string("cannot create the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
   if (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK)
     throw SourceError(std::string("the device refused the video modes: ") + openni::OpenNI::getExtendedError());
-  if (options.registration) {
+  const bool playback = s.device.isFile();
+  if (playback) {
+    // Play once, at the recorded rate, like the sensor it was recorded from.
+    s.device.getPlaybackControl()->setRepeatEnabled(false);
+    s.device.getPlaybackControl()->setSpeed(1.0f);
+  }
+  if (options.registration && !playback) {  // a recording is registered, or not, already
     if (!s.device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ||
         s.device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) != openni::STATUS_OK)
       throw SourceError("the device cannot register depth to colour in hardware");
@@ -120,12 +138,30 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
   (void)s.device.setDepthColorSyncEnabled(true);
   (void)s.colour.setMirroringEnabled(false);
   (void)s.depth.setMirroringEnabled(false);
-  if (s.colour.start() != openni::STATUS_OK || s.depth.start() != openni::STATUS_OK)
+  s.uri = s.device.getDeviceInfo().getUri();
+  if (openni::OpenNI::addDeviceDisconnectedListener(impl_.get()) != openni::STATUS_OK)
+    throw SourceError("cannot watch the OpenNI2 device for disconnection");
+  if (s.colour.start() != openni::STATUS_OK || s.depth.start() != openni::STATUS_OK) {
+    openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
     throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
+  }
   for (auto& slot : s.depth_history) slot.depth_m.create(options.height, options.width, CV_32FC1);
+  if (!options.record_path.empty()) {
+    if (s.recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
+        s.recorder.attach(s.colour) != openni::STATUS_OK || s.recorder.attach(s.depth) != openni::STATUS_OK ||
+        s.recorder.start() != openni::STATUS_OK) {
+      openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
+      throw SourceError("cannot record to '" + options.record_path + "': " + openni::OpenNI::getExtendedError());
+    }
+  }
 }
 
 OpenNiSource::~OpenNiSource() {
+  openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
+  if (impl_->recorder.isValid()) {
+    impl_->recorder.stop();
+    impl_->recorder.destroy();
+  }
   impl_->colour.stop();
   impl_->depth.stop();
   impl_->colour.destroy();
@@ -134,6 +170,8 @@ OpenNiSource::~OpenNiSource() {
 }
 
 int OpenNiSource::dropped_colour_frames() const { return impl_->dropped; }
+
+void OpenNiSource::interrupt() { impl_->interrupted = true; }
 
 std::string OpenNiSource::description() const {
   const auto& s = *impl_;
@@ -156,12 +194,26 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   };
   bool have_colour = false;
   std::int64_t colour_t = 0;
+  // One wait for any stream, in slices; -1: the budget ran out, -2: interrupted or unplugged.
+  const auto wait_for_stream = [&](int budget_ms) {
+    for (int waited = 0; waited < budget_ms; waited += kWaitSliceMs) {
+      if (s.interrupted || s.unplugged) return -2;
+      int ready = -1;
+      if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, std::min(kWaitSliceMs, budget_ms - waited)) ==
+          openni::STATUS_OK)
+        return ready;
+    }
+    return -1;
+  };
   // Collect until a colour frame is in hand and a depth frame at or after it has arrived
   // (the nearest depth can come up to 17 ms after its colour frame), or the wait runs out.
   while (!(have_colour && depth_at_or_after(colour_t))) {
-    int ready = -1;
-    const int timeout = have_colour ? s.options.pairing_wait_ms : s.options.frame_timeout_ms;
-    if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, timeout) != openni::STATUS_OK) {
+    const int ready = wait_for_stream(have_colour ? s.options.pairing_wait_ms : s.options.frame_timeout_ms);
+    if (ready == -2) {
+      problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
+      return false;
+    }
+    if (ready < 0) {
       if (have_colour) break;  // no later depth: pair with what there is
       problem = "no frame from the sensor for " + std::to_string(s.options.frame_timeout_ms) + " ms (unplugged?)";
       return false;

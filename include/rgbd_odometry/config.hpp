@@ -65,6 +65,29 @@ struct CovarianceConfig {
   double scale = 12.0;
 };
 
+// A live OpenNI2 sensor (ignored for recorded sources).
+struct SensorConfig {
+  int fps = 30;
+  bool registration = true;     // hardware depth-to-colour registration (the paper's set-up)
+  int frame_timeout_ms = 2000;  // no frame for this long: the sensor is reported lost
+  int pairing_wait_ms = 70;     // how long a colour frame waits for its depth frame
+  // After a loss, try to re-open every reconnect_interval_ms for reconnect_timeout_s seconds
+  // (negative: for ever, as on the vehicle; 0: stop at the first loss).
+  double reconnect_timeout_s = -1;
+  int reconnect_interval_ms = 500;
+  std::string record_oni;  // non-empty: also record the sensor's streams to this .oni file
+};
+
+// The real-time pipeline's threads.
+struct RuntimeConfig {
+  // 1: extraction and pair estimation in one thread; 2: extraction of frame k+1 overlaps
+  // the matching/RANSAC/covariance of frame k.
+  int processing_threads = 2;
+  // CPUs to pin the threads to, "" for none. A comma list taken in the order capture,
+  // extraction, estimation, output (wrapping round), e.g. "4,5,6,7" for the XU3's A15 cores.
+  std::string cpu_affinity;
+};
+
 struct Config {
   CameraConfig camera;
   DepthConfig depth;
@@ -72,6 +95,8 @@ struct Config {
   MatchConfig matching;
   RansacConfig ransac;
   CovarianceConfig covariance;
+  SensorConfig sensor;
+  RuntimeConfig runtime;
   std::uint64_t seed = 1;  // with the frame-pair index, seeds RANSAC and the perturbations
 };
 
@@ -95,5 +120,8 @@ std::vector<std::string> config_keys();
 
 // Throws ConfigError naming the first invalid key.
 void validate(const Config& config);
+
+// runtime.cpu_affinity as CPU numbers; throws ConfigError on a malformed list.
+std::vector<int> parse_cpu_list(const std::string& text);
 
 }  // namespace rgbdo

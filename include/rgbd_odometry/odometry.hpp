@@ -43,6 +43,7 @@ struct PairResult {
 struct ProcessedFrame {
   FrameTimes times;
   Status status = Status::Ok;
+  std::string problem;  // the source's words for a failed frame (names the file, say)
   Features features;
   KeypointGeometry geometry;
 };
@@ -57,6 +58,9 @@ class OdometryPipeline {
   // The pair stage alone, on frames already through extract() (benchmarks, tests).
   void extract(const RgbdFrame& frame, ProcessedFrame& out);
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index);
+
+  // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
+  void forget_motion() { last_motion_.reset(); }
 
   const Config& config() const { return config_; }
 

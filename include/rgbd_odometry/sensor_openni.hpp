@@ -17,13 +17,14 @@
 namespace rgbdo {
 
 struct OpenNiOptions {
-  std::string uri;  // empty: the first device found
+  std::string uri;  // empty: the first device found; a path ending in .oni: play that recording
   int width = 640, height = 480, fps = 30;
   bool registration = true;  // hardware depth-to-colour registration (the paper's set-up)
   int frame_timeout_ms = 2000;  // no frame for this long: the device is reported lost
   // How long a colour frame waits for a depth frame at or after its time (at 30 Hz the
   // nearest depth can follow by up to one frame, 33 ms, plus transport).
   int pairing_wait_ms = 70;
+  std::string record_path;  // non-empty: record both streams there (openni::Recorder, lossless)
 };
 
 struct DeviceDescription {
@@ -45,6 +46,9 @@ class OpenNiSource {
   // The next colour frame with its depth. False when the device stopped delivering (no frame
   // within the timeout, or disconnected); `problem` then says which.
   bool next(RgbdFrame& out, std::string& problem);
+
+  // Makes a next() in progress (or the next one) return false promptly; thread-safe.
+  void interrupt();
 
   int dropped_colour_frames() const;
   std::string description() const;  // device name, URI and the modes in use

@@ -14,6 +14,7 @@ enum class Status {
   DegenerateSample,   // every RANSAC sample was collinear or violated rigidity
   RansacFailed,       // the best hypothesis has too few inliers
   CovarianceFailed,   // the perturbation covariance was not finite and positive definite
+  SensorLost,         // the sensor went away between the two frames (unplugged, re-opened)
 };
 
 // The lower-case word written in the odometry log's `status` column.
@@ -27,6 +28,7 @@ constexpr std::string_view status_word(Status s) {
     case Status::DegenerateSample: return "degenerate_sample";
     case Status::RansacFailed: return "ransac_failed";
     case Status::CovarianceFailed: return "covariance_failed";
+    case Status::SensorLost: return "sensor_lost";
   }
   return "unknown";
 }

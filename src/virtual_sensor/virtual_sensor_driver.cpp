@@ -5,11 +5,17 @@
 // OpenNI2 loads it like any vendor driver, so code under test reads it exactly as it reads a
 // PrimeSense sensor.
 //
-// URI: rgbdo-virtual:<TUM directory>[?rate=R&drop=i,j&stall=i:ms&disconnect=i]
+// URI: rgbdo-virtual:<TUM directory>[?rate=R&drop=i,j&stall=i:ms&disconnect=i&reconnect=ms]
 //   rate        playback speed (1 = recorded rate)
 //   drop        colour frame indices never delivered (their index is skipped, as a USB drop)
 //   stall       before colour frame i, both streams stop for `ms` milliseconds
 //   disconnect  at colour frame i the device reports itself disconnected and stops
+//   reconnect   `ms` after the disconnect the device is plugged back in: it can be opened
+//               again and plays on from the frames recorded by then (the scene went on
+//               while it was away), as a sensor on a loose cable does
+// Other parameters (say id=3, to tell otherwise equal URIs apart) are ignored.
+// When the recording has been played to its end the device unplugs itself for good: a
+// program reading it sees what it would see of a sensor pulled out for ever.
 // The device is also announced at start-up when RGBDO_VIRTUAL_SENSOR holds such a URI.
 #include <Driver/OniDriverAPI.h>
 
@@ -18,6 +24,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -44,6 +53,21 @@ struct Options {
   std::set<int> drop;
   int stall_at = -1, stall_ms = 0;
   int disconnect_at = -1;
+  int reconnect_ms = -1;  // -1: never comes back
+};
+
+// What outlives one open of a device: the recording's clock (it runs on while the device is
+// unplugged) and whether the one disconnect has happened. Shared by every open of a URI.
+struct Timeline {
+  std::mutex mutex;
+  std::chrono::steady_clock::time_point start;
+  bool disconnected = false;
+  bool exhausted = false;  // played to the end: gone for good
+  std::chrono::steady_clock::time_point back_at;
+  bool unplugged_now() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return exhausted || (disconnected && std::chrono::steady_clock::now() < back_at);
+  }
 };
 
 bool parse_uri(const std::string& uri, Options& o) {
@@ -69,7 +93,9 @@ bool parse_uri(const std::string& uri, Options& o) {
       o.stall_ms = std::atoi(value.substr(colon + 1).c_str());
     } else if (key == "disconnect") {
       o.disconnect_at = std::atoi(value.c_str());
-    } else {
+    } else if (key == "reconnect") {
+      o.reconnect_ms = std::atoi(value.c_str());
+    } else if (key != "id") {
       return false;
     }
   }
@@ -193,8 +219,10 @@ class VirtualStream : public oni::driver::StreamBase {
 
 class VirtualDevice : public oni::driver::DeviceBase {
  public:
-  VirtualDevice(const OniDeviceInfo& info, Options options, std::function<void()> on_disconnect)
-      : info_(info), options_(std::move(options)), on_disconnect_(std::move(on_disconnect)) {
+  VirtualDevice(const OniDeviceInfo& info, Options options, std::shared_ptr<Timeline> timeline,
+                std::function<void()> on_disconnect)
+      : info_(info), options_(std::move(options)), timeline_(std::move(timeline)),
+        on_disconnect_(std::move(on_disconnect)) {
     colour_modes_[0] = OniVideoMode{ONI_PIXEL_FORMAT_RGB888, kWidth, kHeight, kFps};
     depth_modes_[0] = OniVideoMode{ONI_PIXEL_FORMAT_DEPTH_100_UM, kWidth, kHeight, kFps};
     sensors_[0] = OniSensorInfo{ONI_SENSOR_COLOR, 1, colour_modes_};
@@ -203,6 +231,11 @@ class VirtualDevice : public oni::driver::DeviceBase {
   ~VirtualDevice() override {
     stop_ = true;
     if (player_.joinable()) player_.join();
+    // The re-plugged device has been used up: a later open of the URI starts the story anew.
+    if (resumed_) {
+      std::lock_guard<std::mutex> lock(timeline_->mutex);
+      timeline_->disconnected = false;
+    }
   }
 
   OniStatus getSensorInfoList(OniSensorInfo** infos, int* count) override {
@@ -257,21 +290,41 @@ class VirtualDevice : public oni::driver::DeviceBase {
     const std::vector<Event> events = read_events(options_.directory);
     if (events.empty()) return;
     const double t0 = events.front().t_s;
-    const auto start = std::chrono::steady_clock::now();
+    std::chrono::steady_clock::time_point start;
+    bool resumed = false;
+    {
+      std::lock_guard<std::mutex> lock(timeline_->mutex);
+      resumed = timeline_->disconnected;
+      if (!resumed) timeline_->start = std::chrono::steady_clock::now();
+      start = timeline_->start;
+      resumed_ = resumed;
+    }
+    const auto opened = std::chrono::steady_clock::now();
+    const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    };
     double stalled_s = 0;
     int colour_index = 0, depth_index = 0;
     for (const Event& e : events) {
       if (stop_) return;
-      if (e.colour && colour_index == options_.disconnect_at) {
+      if (e.colour && colour_index == options_.disconnect_at && !resumed) {
+        {
+          std::lock_guard<std::mutex> lock(timeline_->mutex);
+          timeline_->disconnected = true;
+          timeline_->back_at = options_.reconnect_ms < 0
+                                   ? std::chrono::steady_clock::time_point::max()
+                                   : std::chrono::steady_clock::now() + std::chrono::milliseconds(options_.reconnect_ms);
+        }
         on_disconnect_();
         return;
       }
       if (e.colour && colour_index == options_.stall_at) stalled_s += options_.stall_ms * 1e-3;
       const double due_s = (e.t_s - t0) / options_.rate + stalled_s;
-      while (!stop_ && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < due_s)
-        std::this_thread::sleep_for(std::chrono::milliseconds(1));
       const auto timestamp_us = static_cast<std::uint64_t>(std::llround((e.t_s - t0) * 1e6));
       const int index = e.colour ? colour_index++ : depth_index++;
+      // Re-plugged: what was recorded while the device was away is gone.
+      if (resumed && due_s < std::chrono::duration<double>(opened - start).count()) continue;
+      while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
       if (e.colour && options_.drop.count(index)) continue;
       cv::Mat image = cv::imread(e.path, e.colour ? cv::IMREAD_COLOR : cv::IMREAD_ANYDEPTH);
       if (image.empty() || image.cols != kWidth || image.rows != kHeight) continue;
@@ -284,10 +337,20 @@ class VirtualDevice : public oni::driver::DeviceBase {
       VirtualStream* s = e.colour ? colour_ : depth_;
       if (s) s->deliver(image, timestamp_us, index);
     }
+    // The last frames are out; a frame period later the recording's device leaves.
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(100 / options_.rate));
+    while (!stop_ && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    if (stop_) return;
+    {
+      std::lock_guard<std::mutex> lock(timeline_->mutex);
+      timeline_->exhausted = true;
+    }
+    on_disconnect_();
   }
 
   OniDeviceInfo info_;
   Options options_;
+  std::shared_ptr<Timeline> timeline_;
   std::function<void()> on_disconnect_;
   OniVideoMode colour_modes_[1], depth_modes_[1];
   OniSensorInfo sensors_[2];
@@ -296,11 +359,13 @@ class VirtualDevice : public oni::driver::DeviceBase {
   VirtualStream* depth_ = nullptr;
   std::thread player_;
   std::atomic<bool> stop_{false};
+  bool resumed_ = false;
 };
 
 class VirtualDriver : public oni::driver::DriverBase {
  public:
   explicit VirtualDriver(OniDriverServices* services) : DriverBase(services) {}
+  ~VirtualDriver() override { shutdown(); }
 
   OniStatus initialize(oni::driver::DeviceConnectedCallback connected, oni::driver::DeviceDisconnectedCallback disconnected,
                        oni::driver::DeviceStateChangedCallback state_changed, void* cookie) override {
@@ -311,32 +376,78 @@ class VirtualDriver : public oni::driver::DriverBase {
   OniStatus tryDevice(const char* uri) override {
     Options o;
     if (!parse_uri(uri, o)) return ONI_STATUS_ERROR;
+    const auto timeline = timeline_of(uri);
+    if (timeline->unplugged_now()) return ONI_STATUS_NO_DEVICE;
     std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& known : announced_)
-      if (known == uri) return ONI_STATUS_OK;
-    OniDeviceInfo info{};
-    std::snprintf(info.uri, ONI_MAX_STR, "%s", uri);
-    std::snprintf(info.vendor, ONI_MAX_STR, "rgbd-odometry");
-    std::snprintf(info.name, ONI_MAX_STR, "virtual sensor (TUM replay)");
-    announced_.push_back(uri);
+    if (announced_.count(uri)) return ONI_STATUS_OK;
+    const OniDeviceInfo info = info_for(uri);
+    announced_.insert(uri);
     deviceConnected(&info);
     return ONI_STATUS_OK;
   }
   oni::driver::DeviceBase* deviceOpen(const char* uri, const char* /*mode*/) override {
     Options o;
     if (!parse_uri(uri, o)) return nullptr;
+    const auto timeline = timeline_of(uri);
+    if (timeline->unplugged_now()) return nullptr;
+    const OniDeviceInfo info = info_for(uri);
+    return new VirtualDevice(info, o, timeline, [this, info, timeline] {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        announced_.erase(info.uri);
+        if (!timeline->exhausted) replugs_.push_back(info);
+      }
+      deviceDisconnected(&info);
+    });
+  }
+  void deviceClose(oni::driver::DeviceBase* device) override { delete device; }
+  void shutdown() override {
+    stop_ = true;
+    if (replugger_.joinable()) replugger_.join();
+  }
+
+ private:
+  static OniDeviceInfo info_for(const char* uri) {
     OniDeviceInfo info{};
     std::snprintf(info.uri, ONI_MAX_STR, "%s", uri);
     std::snprintf(info.vendor, ONI_MAX_STR, "rgbd-odometry");
     std::snprintf(info.name, ONI_MAX_STR, "virtual sensor (TUM replay)");
-    return new VirtualDevice(info, o, [this, info] { deviceDisconnected(&info); });
+    return info;
   }
-  void deviceClose(oni::driver::DeviceBase* device) override { delete device; }
-  void shutdown() override {}
-
- private:
+  std::shared_ptr<Timeline> timeline_of(const std::string& uri) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto& t = timelines_[uri];
+    if (!t) t = std::make_shared<Timeline>();
+    return t;
+  }
+  // A real driver announces a device again when USB reports it back (OpenNI2 finds a
+  // disconnected device only through such an announcement); this thread does that for a
+  // virtual device whose reconnect time has come.
+  void replug_when_due() {
+    while (!stop_) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      std::vector<OniDeviceInfo> due;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto it = replugs_.begin(); it != replugs_.end();) {
+          if (!timelines_[it->uri]->unplugged_now()) {
+            due.push_back(*it);
+            announced_.insert(it->uri);
+            it = replugs_.erase(it);
+          } else {
+            ++it;
+          }
+        }
+      }
+      for (const auto& info : due) deviceConnected(&info);
+    }
+  }
   std::mutex mutex_;
-  std::vector<std::string> announced_;
+  std::set<std::string> announced_;
+  std::map<std::string, std::shared_ptr<Timeline>> timelines_;
+  std::vector<OniDeviceInfo> replugs_;
+  std::atomic<bool> stop_{false};
+  std::thread replugger_{[this] { replug_when_due(); }};
 };
 
 }  // namespace

@@ -1,0 +1,28 @@
+#include "rgbd_odometry/latency.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rgbdo {
+
+void LatencyHistogram::add(double latency_ms) {
+  const double clamped = std::max(0.0, latency_ms);
+  const int bin = std::min(kBins - 1, static_cast<int>(clamped / kBinMs));
+  ++bins_[static_cast<size_t>(bin)];
+  ++count_;
+  max_ms_ = std::max(max_ms_, clamped);
+}
+
+double LatencyHistogram::quantile_ms(double q) const {
+  if (count_ == 0) return 0;
+  // The smallest bin whose cumulative count reaches ceil(q * n): the nearest-rank quantile.
+  const auto rank = static_cast<std::uint64_t>(std::max(1.0, std::ceil(q * static_cast<double>(count_))));
+  std::uint64_t seen = 0;
+  for (int b = 0; b < kBins; ++b) {
+    seen += bins_[static_cast<size_t>(b)];
+    if (seen >= rank) return std::min((b + 0.5) * kBinMs, max_ms_);
+  }
+  return max_ms_;
+}
+
+}  // namespace rgbdo
