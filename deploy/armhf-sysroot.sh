@@ -17,10 +17,10 @@ triplet=arm-linux-gnueabihf
 # Every -dev package the project links, with the C/C++ runtime the cross compiler expects.
 packages=(
   libc6-dev libstdc++-12-dev
-  libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev
+  libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
-recipe_version=2
+recipe_version=3
 want="v$recipe_version $(printf '%s ' "${packages[@]}")"
 stamp="$dest/.rgbdo-sysroot"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then

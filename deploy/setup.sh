@@ -18,7 +18,7 @@ jobs=${JOBS:-$(nproc)}
 
 packages=(
   build-essential cmake pkg-config
-  libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev
+  libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 # The armhf cross build, its sysroot and emulator, and systemd-analyze for the package test.

@@ -1,5 +1,7 @@
 #include "rgbd_odometry/config.hpp"
 
+#include "rgbd_odometry/link.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -68,6 +70,19 @@ std::vector<Param> param_table(Config& c) {
       {"sensor.record_oni", &c.sensor.record_oni},
       {"runtime.processing_threads", &c.runtime.processing_threads, 1, 2},
       {"runtime.cpu_affinity", &c.runtime.cpu_affinity},
+      {"body.camera_roll_deg", &c.body.camera_roll_deg, -180, 180},
+      {"body.camera_pitch_deg", &c.body.camera_pitch_deg, -90, 90},
+      {"body.camera_yaw_deg", &c.body.camera_yaw_deg, -180, 180},
+      {"body.camera_x_m", &c.body.camera_x_m, -10, 10},
+      {"body.camera_y_m", &c.body.camera_y_m, -10, 10},
+      {"body.camera_z_m", &c.body.camera_z_m, -10, 10},
+      {"link.uri", &c.link.uri},
+      {"link.system_id", &c.link.system_id, 1, 255},
+      {"link.odometry", &c.link.odometry},
+      {"link.vision_position_delta", &c.link.vision_position_delta},
+      {"link.quality_sigma_fail_m", &c.link.quality_sigma_fail_m, 1e-4, 10},
+      {"link.velocity_error_min_mps", &c.link.velocity_error_min_mps, 0.0, 100},
+      {"link.velocity_error_max_mps", &c.link.velocity_error_max_mps, 0.0, 100},
       {"seed", &c.seed, 0, 1.8e19},
   };
 }
@@ -304,6 +319,17 @@ void validate(const Config& config) {
   if (c.ransac.min_inliers < 3)
     throw ConfigError("config key 'ransac.min_inliers': a rigid motion needs at least 3");
   (void)parse_cpu_list(c.runtime.cpu_affinity);
+  if (c.link.velocity_error_min_mps >= c.link.velocity_error_max_mps)
+    throw ConfigError("config key 'link.velocity_error_min_mps': must be below link.velocity_error_max_mps");
+  if (!c.link.uri.empty()) {
+    try {
+      (void)parse_link_uri(c.link.uri);
+    } catch (const LinkError& e) {
+      throw ConfigError(std::string("config key 'link.uri': ") + e.what());
+    }
+  }
+  if (!c.link.uri.empty() && !c.link.odometry && !c.link.vision_position_delta)
+    throw ConfigError("config key 'link.odometry': a link with neither ODOMETRY nor VISION_POSITION_DELTA sends nothing");
 }
 
 std::vector<int> parse_cpu_list(const std::string& text) {

@@ -26,7 +26,10 @@ int main(int argc, char** argv) {
   app.add_flag_callback(
       "--list-devices", [] { throw CLI::RuntimeError(rgbdo::list_devices(std::cout)); },
       "list the OpenNI2 devices present, then exit");
-  app.add_option("--source", options.source, "frame source URI: tum:DIR (a TUM RGB-D sequence)")->required();
+  app.add_option("--source", options.source,
+                 "frame source: tum:DIR (a TUM RGB-D sequence), openni://[DEVICE-URI] (a live sensor, the first "
+                 "found when empty) or oni:FILE.oni (an OpenNI2 recording)")
+      ->required();
   app.add_option("--config", options.config_path, "YAML configuration (e.g. deploy/config/tum-fr1.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--set", options.overrides, "override a configuration key: --set ransac.max_iterations=300")
@@ -37,6 +40,9 @@ int main(int argc, char** argv) {
   app.add_option("--covariance-scale", scale, "shorthand for --set covariance.scale=S");
   app.add_option("--seed", seed, "shorthand for --set seed=N");
   app.add_option("--log", options.log_path, "write the odometry CSV log here");
+  app.add_option("--link", options.link,
+                 "send MAVLink 2 odometry to the flight computer: udp://HOST:PORT or serial:///dev/ttyX[:BAUD] "
+                 "(overrides link.uri)");
   app.add_option("--trajectory", options.trajectory_path, "write the integrated trajectory (TUM format) here");
   app.add_option("--max-frames", options.max_frames, "stop after this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_flag("--start-at-groundtruth", options.start_at_groundtruth,

@@ -12,6 +12,7 @@
 
 #include "rgbd_odometry/bounded_queue.hpp"
 #include "rgbd_odometry/frame_mailbox.hpp"
+#include "rgbd_odometry/usb_devices.hpp"
 
 namespace rgbdo {
 namespace {
@@ -62,10 +63,12 @@ void pin_thread(const std::vector<int>& cpus, int role) {
 class Run {
  public:
   Run(const Config& config, FrameFeed& feed, const RealtimePipeline::OutputFn& on_output,
-      const RealtimePipeline::MessageFn& on_message)
-      : config_(config), cpus_(parse_cpu_list(config.runtime.cpu_affinity)), feed_(feed), on_output_(on_output),
+      const RealtimePipeline::MessageFn& on_message, const std::function<void()>& on_tick)
+      : on_tick_(on_tick), config_(config), cpus_(parse_cpu_list(config.runtime.cpu_affinity)), feed_(feed), on_output_(on_output),
         on_message_(on_message), mailbox_(!feed.live()), extractor_(config), estimator_(config) {
     check_cpus_allowed(cpus_);
+    // USB hot-plug tells when a sensor comes back sooner than the next re-open attempt would.
+    if (feed.live()) usb_ = std::make_unique<UsbWatcher>();
     for (std::size_t i = 0; i < kProcessedSlots; ++i) free_.push(static_cast<int>(i));
   }
 
@@ -138,7 +141,9 @@ class Run {
     while (!stopping_ && Clock::now() < deadline) {
       if (feed_.reopen(problem)) return true;
       const auto until = Clock::now() + std::chrono::milliseconds(config_.sensor.reconnect_interval_ms);
-      while (!stopping_ && Clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      const std::uint64_t arrivals = usb_ ? usb_->arrivals() : 0;
+      while (!stopping_ && Clock::now() < until && (!usb_ || usb_->arrivals() == arrivals))
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     if (!stopping_) message("sensor did not come back within " + std::to_string(timeout_s) + " s: " + problem);
     return false;
@@ -222,10 +227,16 @@ class Run {
   void output() {
     pin_thread(cpus_, 3);
     auto next_status = Clock::now() + kStatusPeriod;
-    std::uint64_t frames_at_status = 0;
+    std::uint64_t frames_at_status = 0, usb_departures = 0;
+    if (usb_ && !usb_->problem().empty()) on_message_(usb_->problem());
     for (;;) {
       auto item = outputs_.pop_for(kPoll);
       flush_messages();
+      if (on_tick_) on_tick_();
+      if (usb_ && usb_->departures() != usb_departures) {
+        usb_departures = usb_->departures();
+        on_message_("USB: an RGB-D sensor left the bus");
+      }
       if (item) {
         ++stats_.frames;
         if (item->has_pair) {
@@ -267,11 +278,13 @@ class Run {
     for (const auto& m : pending) on_message_(m);
   }
 
+  const std::function<void()>& on_tick_;
   const Config& config_;
   const std::vector<int> cpus_;
   FrameFeed& feed_;
   const RealtimePipeline::OutputFn& on_output_;
   const RealtimePipeline::MessageFn& on_message_;
+  std::unique_ptr<UsbWatcher> usb_;
   FrameMailbox mailbox_;
   OdometryPipeline extractor_, estimator_;  // one per thread: no shared scratch state
   std::array<ProcessedSlot, kProcessedSlots> slots_;
@@ -290,7 +303,7 @@ RealtimePipeline::RealtimePipeline(const Config& config, FrameFeed& feed, Output
     : config_(config), feed_(feed), on_output_(std::move(on_output)), on_message_(std::move(on_message)) {}
 
 RealtimeStats RealtimePipeline::run(const std::atomic<bool>& stop) {
-  auto run = std::make_unique<Run>(config_, feed_, on_output_, on_message_);
+  auto run = std::make_unique<Run>(config_, feed_, on_output_, on_message_, on_tick_);
   return run->go(stop);
 }
 

@@ -1,6 +1,7 @@
 #include "rgbd_odometry/replay.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <memory>
@@ -12,10 +13,12 @@
 #include "rgbd_odometry/integrate.hpp"
 #include "rgbd_odometry/odometry.hpp"
 #include "rgbd_odometry/odometry_log.hpp"
+#include "rgbd_odometry/flight_link.hpp"
 #include "rgbd_odometry/frame_feed.hpp"
 #include "rgbd_odometry/realtime.hpp"
 #include "rgbd_odometry/sensor_openni.hpp"
 #include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/usb_devices.hpp"
 
 namespace rgbdo {
 namespace {
@@ -101,6 +104,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   try {
     if (!options.config_path.empty()) config = load_config(options.config_path);
     apply_overrides(config, options.overrides);
+    if (!options.link.empty()) config.link.uri = options.link;
     validate(config);
   } catch (const ConfigError& e) {
     err << "rgbd-odometry: configuration error: " << e.what() << "\n";
@@ -152,6 +156,17 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     return 1;
   }
 
+  std::unique_ptr<FlightLink> flight;
+  if (!config.link.uri.empty()) {
+    try {
+      flight = std::make_unique<FlightLink>(config);
+      err << "rgbd-odometry: " << flight->startup_report() << "\n";
+    } catch (const LinkError& e) {
+      err << "rgbd-odometry: cannot open the flight-computer link: " << e.what() << "\n";
+      return 1;
+    }
+  }
+
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
   const auto* tum = dynamic_cast<const TumFeed*>(feed.get());
   if (options.start_at_groundtruth && tum && !tum->sequence().frames.empty()) {
@@ -189,6 +204,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
         ++timed_pairs;
       }
       if (log) log->write(r);
+      if (flight) flight->send_pair(r);
       if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
       evaluator.add(r, origin.inverse() * integrator.pose());
       ++pair_count;
@@ -209,6 +225,14 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   RealtimeStats run;
   try {
     RealtimePipeline pipeline(config, *feed, on_output, on_message);
+    if (flight) {
+      pipeline.set_tick([&] {
+        flight->tick(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                         std::chrono::steady_clock::now().time_since_epoch())
+                         .count());
+        if (const std::string news = flight->news(); !news.empty()) on_message("link: " + news);
+      });
+    }
     run = pipeline.run(g_stop);
   } catch (const ConfigError& e) {
     err << "rgbd-odometry: configuration error: " << e.what() << "\n";
@@ -222,28 +246,60 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     return 1;
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, run);
+  if (flight) {
+    const LinkStats st = flight->stats();
+    out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down
+        << " dropped (" << st.frames_dropped_link_down << " while the link was down), " << st.reconnects
+        << " reconnects\n";
+  }
   return 0;
 }
 
 void request_stop() { g_stop = true; }
 
-int list_devices(std::ostream& out) {
+int list_devices(std::ostream& out, int width, int height, int fps) {
+  // OpenNI2's view: the devices it can open (the real runtime, with every installed driver).
+  std::vector<DeviceDescription> devices;
+  int rc = 0;
   try {
-    const auto devices = list_openni_devices();
-    if (devices.empty()) {
-      out << "no OpenNI2 device found (is the sensor plugged in, and is its USB port powered?)\n";
-      return 0;
-    }
-    for (const auto& d : devices) {
-      char ids[32];
-      std::snprintf(ids, sizeof ids, "%04x:%04x", d.usb_vendor_id, d.usb_product_id);
-      out << d.uri << "  " << d.vendor << " " << d.name << "  usb " << ids << "\n";
-    }
-    return 0;
+    devices = list_openni_devices();
   } catch (const SourceError& e) {
     out << "cannot list OpenNI2 devices: " << e.what() << "\n";
-    return 1;
+    rc = 1;
   }
+  // USB's view: where each sensor is plugged in and how fast (a sensor OpenNI2 does not
+  // list, driver missing or no permission, still shows here).
+  std::vector<UsbDevice> usb;
+  std::string usb_problem;
+  try {
+    usb = list_usb_devices();
+  } catch (const std::exception& e) {
+    usb_problem = e.what();
+  }
+  std::vector<const UsbDevice*> sensors;
+  for (const auto& u : usb)
+    if (!u.known_as.empty()) sensors.push_back(&u);
+
+  if (devices.empty()) out << "no OpenNI2 device found (is the sensor plugged in, and is its USB port powered?)\n";
+  for (const auto& d : devices) {
+    char ids[32];
+    std::snprintf(ids, sizeof ids, "%04x:%04x", d.usb_vendor_id, d.usb_product_id);
+    out << "OpenNI2: " << d.uri << "  " << d.vendor << " " << d.name << "  usb " << ids << "\n";
+  }
+  if (!usb_problem.empty()) {
+    out << "USB: cannot look at the USB devices: " << usb_problem << "\n";
+  } else if (sensors.empty()) {
+    out << "USB: no RGB-D sensor on USB (" << usb.size() << " other USB devices)\n";
+  }
+  for (const UsbDevice* u : sensors) {
+    char ids[32];
+    std::snprintf(ids, sizeof ids, "%04x:%04x", u->vendor_id, u->product_id);
+    out << "USB: " << u->known_as << "  " << ids << "  bus " << u->bus << " port " << u->port_path << " address "
+        << u->address << "  " << u->speed_name << "\n";
+    const UsbBandwidth b = check_usb_bandwidth(u->speed_mbps, width, height, fps);
+    if (!b.sufficient) out << "  WARNING: " << b.message << "\n";
+  }
+  return rc;
 }
 
 }  // namespace rgbdo

@@ -121,13 +121,16 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
   if (s.colour.create(s.device, openni::SENSOR_COLOR) != openni::STATUS_OK ||
       s.depth.create(s.device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
     throw SourceError(std::string("cannot create the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
-  if (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK)
-    throw SourceError(std::string("the device refused the video modes: ") + openni::OpenNI::getExtendedError());
   const bool playback = s.device.isFile();
+  // A recording plays in the modes it was recorded in (choose_mode checked them above).
+  if (!playback &&
+      (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK))
+    throw SourceError(std::string("the device refused the video modes: ") + openni::OpenNI::getExtendedError());
   if (playback) {
-    // Play once, at the recorded rate, like the sensor it was recorded from.
+    // Play once, each frame when it is read ("manual" speed): a recording is replayed
+    // losslessly, at the pace of the pipeline, as a TUM sequence is.
     s.device.getPlaybackControl()->setRepeatEnabled(false);
-    s.device.getPlaybackControl()->setSpeed(1.0f);
+    s.device.getPlaybackControl()->setSpeed(-1.0f);
   }
   if (options.registration && !playback) {  // a recording is registered, or not, already
     if (!s.device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ||

@@ -88,6 +88,27 @@ struct RuntimeConfig {
   std::string cpu_affinity;
 };
 
+// Where the camera sits on the vehicle. The body frame is FRD (x forward, y right, z down);
+// with all zeros the camera looks forward along body x, its image x along body y (right) and
+// its image y along body z (down). The angles rotate the camera from that mount (Z-Y-X:
+// yaw about body z, then pitch, then roll), e.g. pitch -90 for a camera looking down.
+struct BodyConfig {
+  double camera_roll_deg = 0, camera_pitch_deg = 0, camera_yaw_deg = 0;
+  double camera_x_m = 0, camera_y_m = 0, camera_z_m = 0;  // camera position in the body frame
+};
+
+// The MAVLink 2 link to the flight computer (README "Flight-computer link").
+struct LinkConfig {
+  std::string uri;  // udp://HOST:PORT or serial:///dev/ttyX[:BAUD]; empty: no link
+  int system_id = 1;  // the vehicle's: a companion computer shares its autopilot's system id
+  bool odometry = true;                 // send ODOMETRY (#331): PX4 EKF2, ArduPilot EKF3
+  bool vision_position_delta = false;   // send VISION_POSITION_DELTA (#11011): ArduPilot
+  double quality_sigma_fail_m = 0.02;   // frame-to-frame sigma_t at which quality reaches 1 %
+  // ArduPilot's EK3_VIS_VERR_MIN / _MAX: confidence maps onto that velocity-noise range.
+  double velocity_error_min_mps = 0.1;
+  double velocity_error_max_mps = 0.9;
+};
+
 struct Config {
   CameraConfig camera;
   DepthConfig depth;
@@ -97,6 +118,8 @@ struct Config {
   CovarianceConfig covariance;
   SensorConfig sensor;
   RuntimeConfig runtime;
+  BodyConfig body;
+  LinkConfig link;
   std::uint64_t seed = 1;  // with the frame-pair index, seeds RANSAC and the perturbations
 };
 

@@ -57,10 +57,10 @@ class TumFeed : public FrameFeed {
 class OpenNiFeed : public FrameFeed {
  public:
   // Opens the device now (throws SourceError when it cannot). A path ending in .oni plays that
-  // recording through OpenNI2's file driver, once, at the recorded rate.
+  // recording through OpenNI2's file driver, once, every frame (not live: nothing skipped).
   OpenNiFeed(const OpenNiOptions& options, int max_frames);
   FeedState next(RgbdFrame& frame, std::string& problem) override;
-  bool live() const override { return true; }
+  bool live() const override { return !playback_; }
   bool reopen(std::string& problem) override;
   void interrupt() override;
   std::string description() const override;

@@ -49,6 +49,8 @@ class RealtimePipeline {
   // on_output gets every frame's result, in capture order; on_message the run's news (sensor
   // lost / back, periodic status). Both are called on the output thread only.
   RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message);
+  // Called on the output thread at least every 50 ms, frames or not (heartbeats, link news).
+  void set_tick(std::function<void()> on_tick) { on_tick_ = std::move(on_tick); }
 
   // Runs until the feed ends, the sensor stays lost past sensor.reconnect_timeout_s, or
   // `stop` becomes true (then: within a second, every frame in hand is finished and output).
@@ -60,6 +62,7 @@ class RealtimePipeline {
   FrameFeed& feed_;
   OutputFn on_output_;
   MessageFn on_message_;
+  std::function<void()> on_tick_;
 };
 
 }  // namespace rgbdo

@@ -13,6 +13,7 @@ struct RunOptions {
   std::vector<std::string> overrides;  // "section.key=value", applied after the file
   std::string log_path;         // odometry CSV, empty: none
   std::string trajectory_path;  // TUM trajectory, empty: none
+  std::string link;             // MAVLink link URI (overrides link.uri), empty: the config's
   bool quiet = false;           // no per-pair lines
   bool verbose = false;         // per-pair stage times and counts
   bool start_at_groundtruth = false;  // trajectory origin: ground-truth pose of the first frame
@@ -26,7 +27,8 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
 // Asks a running run_odometry to finish the current frame, flush and return (signal-safe).
 void request_stop();
 
-// Prints the OpenNI2 devices present; returns the exit code.
-int list_devices(std::ostream& out);
+// Prints the OpenNI2 devices and the RGB-D sensors on USB (port, link speed, and a warning
+// when the link cannot carry colour + depth at this size and rate); returns the exit code.
+int list_devices(std::ostream& out, int width = 640, int height = 480, int fps = 30);
 
 }  // namespace rgbdo

@@ -1,0 +1,182 @@
+#pragma once
+// The wire to the flight computer: MAVLink 2 frames, written by hand so that the product
+// carries no generated MAVLink library. Three messages only: HEARTBEAT (common.xml/minimal.xml),
+// ODOMETRY (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml).
+//
+// Frame (MAVLink 2, unsigned):
+//   0xFD | len | incompat_flags=0 | compat_flags=0 | seq | sysid | compid | msgid (3 B, LE)
+//   | payload (len bytes) | crc (2 B, LE)
+// The payload is the message's fields in wire order (base fields sorted by element size,
+// largest first, stable; extension fields after them in XML order), little-endian, with
+// trailing zero bytes trimmed (the receiver zero-fills them again); at least one byte stays.
+// The CRC is CRC-16/MCRF4XX over len..end of payload, then over the message's CRC_EXTRA byte,
+// which a receiver uses to reject a message whose definition differs from its own.
+//
+// Every constant below was checked against the published definitions (mavlink/mavlink
+// message_definitions, the generated mavlink/c_library_v2 headers); test_mavlink.cpp derives
+// each CRC_EXTRA again from the field list.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+
+namespace rgbdo::mavlink {
+
+// ---- frame layout ---------------------------------------------------------------------
+inline constexpr std::uint8_t kMagicV2 = 0xFD;
+inline constexpr std::size_t kHeaderBytes = 10;     // magic .. msgid
+inline constexpr std::size_t kChecksumBytes = 2;
+inline constexpr std::size_t kSignatureBytes = 13;  // never written (no signing), but a
+                                                    // buffer that can hold any frame is the
+                                                    // size every MAVLink 2 implementation uses
+inline constexpr std::size_t kMaxPayloadBytes = 255;
+inline constexpr std::size_t kMaxFrameBytes = kHeaderBytes + kMaxPayloadBytes + kChecksumBytes + kSignatureBytes;
+static_assert(kMaxFrameBytes == 280);
+
+using FrameBuffer = std::array<std::uint8_t, kMaxFrameBytes>;
+using FrameSpan = std::span<std::uint8_t, kMaxFrameBytes>;  // a FrameBuffer converts implicitly
+
+// ---- enum values used by this program (common.xml / minimal.xml) -----------------------
+inline constexpr std::uint8_t kMavTypeOnboardController = 18;           // MAV_TYPE
+inline constexpr std::uint8_t kMavAutopilotInvalid = 8;                 // MAV_AUTOPILOT: not an autopilot
+inline constexpr std::uint8_t kMavStateStandby = 3;                     // MAV_STATE
+inline constexpr std::uint8_t kMavStateActive = 4;
+inline constexpr std::uint8_t kMavStateCritical = 5;
+inline constexpr std::uint8_t kMavCompIdVisualInertialOdometry = 197;  // MAV_COMPONENT
+inline constexpr std::uint8_t kMavFrameBodyFrd = 12;                    // MAV_FRAME
+inline constexpr std::uint8_t kMavFrameLocalFrd = 20;
+inline constexpr std::uint8_t kMavEstimatorTypeVision = 2;  // MAV_ESTIMATOR_TYPE (3 is VIO)
+inline constexpr std::uint8_t kMavlinkVersion = 3;          // HEARTBEAT.mavlink_version
+
+inline constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
+
+// ---- messages ---------------------------------------------------------------------------
+// Field comments give unit and invalid value; `k*Offset` is the byte offset in the payload.
+
+struct Heartbeat {  // #0
+  static constexpr std::uint32_t kId = 0;
+  static constexpr std::uint8_t kCrcExtra = 50;
+  static constexpr std::size_t kPayloadBytes = 9;
+
+  std::uint32_t custom_mode = 0;
+  std::uint8_t type = kMavTypeOnboardController;
+  std::uint8_t autopilot = kMavAutopilotInvalid;
+  std::uint8_t base_mode = 0;
+  std::uint8_t system_status = kMavStateStandby;
+  std::uint8_t mavlink_version = kMavlinkVersion;
+
+  static constexpr std::size_t kCustomModeOffset = 0, kTypeOffset = 4, kAutopilotOffset = 5, kBaseModeOffset = 6,
+                               kSystemStatusOffset = 7, kMavlinkVersionOffset = 8;
+};
+static_assert(Heartbeat::kMavlinkVersionOffset + 1 == Heartbeat::kPayloadBytes);
+
+struct Odometry {  // #331, common.xml
+  static constexpr std::uint32_t kId = 331;
+  static constexpr std::uint8_t kCrcExtra = 91;
+  static constexpr std::size_t kBasePayloadBytes = 230;  // without the extension fields
+  static constexpr std::size_t kPayloadBytes = 233;
+
+  std::uint64_t time_usec = 0;                 // [us] capture time of the pose
+  std::uint8_t frame_id = kMavFrameLocalFrd;   // frame of the pose
+  std::uint8_t child_frame_id = kMavFrameBodyFrd;  // frame of the velocities
+  float x = 0, y = 0, z = 0;                   // [m] position in frame_id
+  std::array<float, 4> q{1, 0, 0, 0};          // w, x, y, z: rotation child (body) -> frame_id
+  float vx = kUnknown, vy = kUnknown, vz = kUnknown;  // [m/s] in child_frame_id, NaN unknown
+  float rollspeed = kUnknown, pitchspeed = kUnknown, yawspeed = kUnknown;  // [rad/s], NaN unknown
+  // Upper triangle, row-major, of the 6x6 covariance of (x, y, z, roll, pitch, yaw), [m^2,
+  // rad^2, m rad]; NaN in the first element means unknown.
+  std::array<float, 21> pose_covariance = unknown_covariance();
+  // Same, of (vx, vy, vz, rollspeed, pitchspeed, yawspeed).
+  std::array<float, 21> velocity_covariance = unknown_covariance();
+  // Extensions.
+  std::uint8_t reset_counter = 0;  // incremented when the estimate jumps
+  std::uint8_t estimator_type = kMavEstimatorTypeVision;
+  std::int8_t quality = 0;  // [%] -1 failed, 0 unknown, 1 worst .. 100 best
+
+  static constexpr std::array<float, 21> unknown_covariance() {
+    std::array<float, 21> c{};
+    c.fill(kUnknown);
+    return c;
+  }
+
+  static constexpr std::size_t kTimeUsecOffset = 0, kXOffset = 8, kYOffset = 12, kZOffset = 16, kQOffset = 20,
+                               kVxOffset = 36, kVyOffset = 40, kVzOffset = 44, kRollspeedOffset = 48,
+                               kPitchspeedOffset = 52, kYawspeedOffset = 56, kPoseCovarianceOffset = 60,
+                               kVelocityCovarianceOffset = 144, kFrameIdOffset = 228, kChildFrameIdOffset = 229,
+                               kResetCounterOffset = 230, kEstimatorTypeOffset = 231, kQualityOffset = 232;
+};
+static_assert(Odometry::kQOffset + 4 * 4 == Odometry::kVxOffset);
+static_assert(Odometry::kPoseCovarianceOffset + 21 * 4 == Odometry::kVelocityCovarianceOffset);
+static_assert(Odometry::kVelocityCovarianceOffset + 21 * 4 == Odometry::kFrameIdOffset);
+static_assert(Odometry::kChildFrameIdOffset + 1 == Odometry::kBasePayloadBytes);
+static_assert(Odometry::kQualityOffset + 1 == Odometry::kPayloadBytes);
+
+struct VisionPositionDelta {  // #11011, ardupilotmega.xml
+  static constexpr std::uint32_t kId = 11011;
+  static constexpr std::uint8_t kCrcExtra = 106;
+  static constexpr std::size_t kPayloadBytes = 44;
+
+  std::uint64_t time_usec = 0;        // [us] capture time of the current frame
+  std::uint64_t time_delta_usec = 0;  // [us] since the previous frame
+  // [rad] rotation vector from the previous body frame to the current one.
+  std::array<float, 3> angle_delta{0, 0, 0};
+  // [m] position change, expressed in the current body frame ("rotated to the current
+  // MAV_FRAME_BODY_FRD" in the definition).
+  std::array<float, 3> position_delta{0, 0, 0};
+  float confidence = 0;  // [%] 0..100
+
+  static constexpr std::size_t kTimeUsecOffset = 0, kTimeDeltaUsecOffset = 8, kAngleDeltaOffset = 16,
+                               kPositionDeltaOffset = 28, kConfidenceOffset = 40;
+};
+static_assert(VisionPositionDelta::kConfidenceOffset + 4 == VisionPositionDelta::kPayloadBytes);
+
+// ---- payloads: the full, untrimmed wire image of one message ---------------------------
+void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloadBytes> out);
+void pack_payload(const Odometry& m, std::span<std::uint8_t, Odometry::kPayloadBytes> out);
+void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPositionDelta::kPayloadBytes> out);
+
+// ---- checksum ---------------------------------------------------------------------------
+inline constexpr std::uint16_t kCrcInit = 0xFFFF;
+// CRC-16/MCRF4XX (the "X.25" CRC of MAVLink): reflected polynomial 0x1021, no final XOR.
+[[nodiscard]] constexpr std::uint16_t crc_accumulate(std::uint8_t byte, std::uint16_t crc) {
+  // The byte-wise form MAVLink's checksum.h uses: no table, 8 shifts folded into 4.
+  std::uint8_t tmp = byte ^ static_cast<std::uint8_t>(crc & 0xFF);
+  tmp = static_cast<std::uint8_t>(tmp ^ (tmp << 4));
+  return static_cast<std::uint16_t>((crc >> 8) ^ (tmp << 8) ^ (tmp << 3) ^ (tmp >> 4));
+}
+[[nodiscard]] constexpr std::uint16_t crc16_mcrf4xx(std::span<const std::uint8_t> bytes, std::uint16_t crc = kCrcInit) {
+  for (const std::uint8_t b : bytes) crc = crc_accumulate(b, crc);
+  return crc;
+}
+
+// ---- framing ----------------------------------------------------------------------------
+// One framer per link: the sequence number counts this link's frames (receivers use it to
+// count losses), starting at 0 and wrapping after 255.
+class Framer {
+ public:
+  Framer(std::uint8_t system_id, std::uint8_t component_id) : system_id_(system_id), component_id_(component_id) {}
+
+  // Write one complete frame at the start of `out`; returns its length in bytes.
+  [[nodiscard]] std::size_t encode(const Heartbeat& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const Odometry& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const VisionPositionDelta& m, FrameSpan out);
+
+  // The framing alone, for a payload of `payload_bytes` already written at out[kHeaderBytes]:
+  // trims its trailing zeros, writes header and checksum, returns the frame length.
+  // payload_bytes must not exceed kMaxPayloadBytes.
+  [[nodiscard]] std::size_t finish_frame(std::uint32_t message_id, std::uint8_t crc_extra, std::size_t payload_bytes,
+                                         FrameSpan out);
+
+  std::uint8_t next_sequence() const { return sequence_; }
+
+ private:
+  std::uint8_t system_id_;
+  std::uint8_t component_id_;
+  std::uint8_t sequence_ = 0;
+};
+
+// Length of a payload after MAVLink 2 trimming: trailing zero bytes dropped, never below 1.
+[[nodiscard]] std::size_t trimmed_length(std::span<const std::uint8_t> payload);
+
+}  // namespace rgbdo::mavlink
