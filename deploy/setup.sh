@@ -63,7 +63,17 @@ run_demo() {
   log "odometry log: build/demo/odometry.csv   trajectory: build/demo/trajectory.txt"
 }
 
+# The independent MAVLink decoder of the link tests: node-mavlink from the npm registry, at the
+# versions pinned in test/mavlink_check/package-lock.json. Node.js itself: the machine's, or
+# Debian's when there is none.
+install_mavlink_checker() {
+  command -v node >/dev/null && command -v npm >/dev/null || install_dependencies nodejs npm
+  log "node-mavlink (test/mavlink_check, npm ci)"
+  npm ci --prefix test/mavlink_check --no-audit --no-fund --loglevel=error
+}
+
 run_tests() {
+  install_mavlink_checker
   deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
   build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
     -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"

@@ -49,8 +49,9 @@ namespace {
 using link_detail::LinkProblem;
 using link_detail::steady_now_ns;
 
-constexpr int kPollTimeout_ms = 100;  // the longest the destructor waits for the writer
+constexpr int kPollTimeout_ms = 100;  // the longest the writer waits before looking again
 constexpr std::int64_t kReopenInterval_ns = 500'000'000;
+constexpr std::int64_t kShutdownDrain_ns = 300'000'000;  // the most the destructor gives the queue
 
 std::optional<speed_t> termios_speed(int baud) {
   switch (baud) {
@@ -210,6 +211,9 @@ class SerialLink final : public OutputLink {
     {
       std::lock_guard lock(mutex_);
       stop_ = true;
+      // What is queued at shutdown (the last odometry) still goes out if the line takes it
+      // within a bounded time; a dead line cannot hold the exit up for longer.
+      stop_deadline_ns_ = steady_now_ns() + kShutdownDrain_ns;
     }
     wake_writer_.notify_all();
     writer_.join();
@@ -277,12 +281,20 @@ class SerialLink final : public OutputLink {
       else
         write_some();
     }
-    if (fd_ >= 0) close_device(fd_);
+    if (fd_ >= 0) {
+      // Let the kernel hand the last bytes over before the close flushes them.
+      int unsent = 0;
+      while (steady_now_ns() < stop_deadline_ns_ && ::ioctl(fd_, TIOCOUTQ, &unsent) == 0 && unsent > 0)
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      close_device(fd_);
+    }
   }
 
   bool stopping() {
     std::lock_guard lock(mutex_);
-    return stop_;
+    if (!stop_) return false;
+    const bool drained = ring_.empty() && !in_flight_;
+    return drained || fd_ < 0 || steady_now_ns() >= stop_deadline_ns_;
   }
 
   void reopen_when_due() {
@@ -312,7 +324,7 @@ class SerialLink final : public OutputLink {
   bool take_next_frame() {
     std::unique_lock lock(mutex_);
     wake_writer_.wait_for(lock, std::chrono::milliseconds(kPollTimeout_ms), [this] { return stop_ || !ring_.empty(); });
-    if (stop_ || ring_.empty()) return false;
+    if (ring_.empty()) return false;  // stopping or not: what is queued is still written
     ring_.pop_oldest_into(in_flight_frame_);
     in_flight_ = true;
     written_ = 0;
@@ -385,6 +397,7 @@ class SerialLink final : public OutputLink {
   bool in_flight_ = false;  // in_flight_frame_ holds a frame not yet fully written
   bool up_ = false;
   bool stop_ = false;
+  std::int64_t stop_deadline_ns_ = 0;
   std::uint64_t sent_ = 0, bytes_ = 0, dropped_queue_full_ = 0, dropped_link_down_ = 0, rejected_ = 0, errors_ = 0,
                 reconnects_ = 0;
 

@@ -37,7 +37,7 @@ const MAV_TYPE_ONBOARD_CONTROLLER = 18;
 const MAV_AUTOPILOT_INVALID = 8;
 const MAV_FRAME_LOCAL_FRD = 20;
 const MAV_FRAME_BODY_FRD = 12;
-const MAV_ESTIMATOR_TYPE_VISION = 3;
+const MAV_ESTIMATOR_TYPE_VISION = 2;  // common.xml MAV_ESTIMATOR_TYPE: 2 VISION (3 is VIO)
 
 // ---------------------------------------------------------------------------------------------
 // arguments

@@ -190,7 +190,7 @@ function buildMessages(rows, { Rbc, pbc, vpd, heartbeatEvery = 3, sysid = 1, com
     if (k % heartbeatEvery === 0) heartbeat();
     const m = new common.Odometry();
     m.timeUsec = r.tCurrUs;  // the CSV prints exact microseconds here
-    m.frameId = 20; m.childFrameId = 12; m.estimatorType = 3;
+    m.frameId = 20; m.childFrameId = 12; m.estimatorType = 2;
     const info = { row: k, ok: r.ok };
     if (r.ok) {
       if (failedBefore) { reset = (reset + 1) & 255; failedBefore = false; }

@@ -1,0 +1,152 @@
+// What the program sends to the flight computer, decoded by a MAVLink implementation nobody
+// here wrote (node-mavlink, test/mavlink_check): over a real UDP socket and over a real
+// pseudo-terminal, every frame must pass its CRC and ids, and every field must match the
+// odometry log of the same run, recomputed by the checker's own maths. A link whose peer is
+// not there must not cost the log a single row.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <pty.h>
+#include <sys/wait.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "rgbd_odometry/replay.hpp"
+
+namespace rgbdo {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kCheckDir = RGBDO_MAVLINK_CHECK_DIR;
+constexpr int kPairs = 39;  // the 40 bundled frames
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("rgbdo_link_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Starts the decoder; `inherit_fd` (if >= 0) becomes its fd 3. Returns the child's pid.
+pid_t start_decoder(const std::vector<std::string>& args, int inherit_fd) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (inherit_fd >= 0) ::dup2(inherit_fd, 3);
+    std::vector<std::string> all{"node", kCheckDir + "/decode.mjs"};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execvp("node", argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+std::string wait_for_ready(const fs::path& ready_file) {
+  for (int i = 0; i < 300 && !fs::exists(ready_file); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::ifstream in(ready_file);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+int wait_exit(pid_t pid) {
+  int status = 0;
+  for (int i = 0; i < 600; ++i) {  // 30 s at most: a stuck decoder fails the test, not the suite
+    if (::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  return -1;
+}
+
+int run_program(const std::string& link, const fs::path& log, std::string& output) {
+  RunOptions o;
+  o.source = std::string("tum:") + RGBDO_TEST_DATA_DIR;
+  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
+  o.log_path = log.string();
+  o.link = link;
+  o.overrides = {"link.vision_position_delta=true"};
+  o.quiet = true;
+  std::ostringstream out, err;
+  const int rc = run_odometry(o, out, err);
+  output = out.str() + err.str();
+  return rc;
+}
+
+int check(const fs::path& decoded, const fs::path& log, std::string& report) {
+  const fs::path out = decoded.parent_path() / "check.txt";
+  const std::string cmd = "node " + kCheckDir + "/check.mjs --decoded " + decoded.string() + " --log " + log.string() +
+                          " --expect-vpd --velocity-frame current --jacobians exact > " + out.string() + " 2>&1";
+  const int rc = std::system(cmd.c_str());
+  std::ifstream in(out);
+  report.assign(std::istreambuf_iterator<char>(in), {});
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 128;
+}
+
+TEST(FlightLinkDecoded, OverUdpEveryFrameDecodesAndMatchesTheLog) {
+  ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink"))
+      << "run: npm ci --prefix test/mavlink_check (deploy/setup.sh test does)";
+  const fs::path dir = scratch("udp");
+  const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
+                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
+                                       (dir / "decoded.jsonl").string()},
+                                      -1);
+  const std::string ready = wait_for_ready(dir / "ready");
+  const auto colon = ready.rfind(':');
+  ASSERT_NE(colon, std::string::npos) << "decoder not ready: '" << ready << "'";
+  const std::string port = ready.substr(colon + 1);
+  std::string output;
+  ASSERT_EQ(run_program("udp://127.0.0.1:" + port, dir / "odometry.csv", output), 0) << output;
+  EXPECT_EQ(wait_exit(decoder), 0) << "the decoder met a bad frame or too few messages";
+  std::string report;
+  EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
+}
+
+TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
+  ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink"));
+  const fs::path dir = scratch("pty");
+  int master = -1, slave = -1;
+  char slave_path[256] = {};
+  ASSERT_EQ(::openpty(&master, &slave, slave_path, nullptr, nullptr), 0);
+  termios raw{};
+  ::tcgetattr(master, &raw);
+  ::cfmakeraw(&raw);
+  ::tcsetattr(master, TCSANOW, &raw);
+  const pid_t decoder = start_decoder({"--fd", "3", "--ready-file", (dir / "ready").string(), "--count",
+                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
+                                       (dir / "decoded.jsonl").string()},
+                                      master);
+  ::close(master);  // the decoder has its own copy
+  ASSERT_FALSE(wait_for_ready(dir / "ready").empty());
+  std::string output;
+  ASSERT_EQ(run_program(std::string("serial://") + slave_path + ":921600", dir / "odometry.csv", output), 0) << output;
+  ::close(slave);
+  EXPECT_EQ(wait_exit(decoder), 0) << "the decoder met a bad frame or too few messages";
+  std::string report;
+  EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
+}
+
+// Nothing listens: the link reports it, and odometry and its log are untouched.
+TEST(FlightLinkDecoded, AnUnreachablePeerCostsTheLogNothing) {
+  const fs::path dir = scratch("unreachable");
+  std::string output;
+  // Port 9 (discard) on loopback: nothing listens, the kernel refuses every datagram.
+  ASSERT_EQ(run_program("udp://127.0.0.1:9", dir / "odometry.csv", output), 0) << output;
+  std::ifstream log(dir / "odometry.csv");
+  int rows = 0;
+  for (std::string line; std::getline(log, line);) ++rows;
+  EXPECT_EQ(rows, kPairs + 1);
+  EXPECT_NE(output.find("39 pairs, 39 ok"), std::string::npos) << output;
+  EXPECT_NE(output.find("refused"), std::string::npos) << "the loss is reported: " << output;
+}
+
+}  // namespace
+}  // namespace rgbdo
