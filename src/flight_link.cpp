@@ -34,7 +34,7 @@ CameraExtrinsic extrinsic_from(const BodyConfig& body) {
 }
 
 FlightLink::FlightLink(const Config& config)
-    : config_(config.link), link_(open_link(config.link.uri)), options_(parse_link_uri(config.link.uri)),
+    : config_(config.link), options_(parse_link_uri(config.link.uri)), link_(open_link(options_)),
       builder_(message_config(config)),
       framer_(static_cast<std::uint8_t>(config.link.system_id), mavlink::kMavCompIdVisualInertialOdometry) {}
 

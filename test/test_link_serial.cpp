@@ -22,24 +22,15 @@
 #include <gtest/gtest.h>
 
 #include "rgbd_odometry/link.hpp"
+#include "link_test_frames.hpp"
 
 namespace rgbdo {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
+using link_test::Bytes;
+using link_test::frame_seq;
+using link_test::make_frame;
 using Clock = std::chrono::steady_clock;
-
-Bytes make_frame(std::uint32_t seq, std::size_t size) {
-  Bytes f(size);
-  for (std::size_t i = 0; i < size; ++i) f[i] = static_cast<std::uint8_t>(seq * 31 + i * 7);
-  for (std::size_t i = 0; i < 4 && i < size; ++i) f[i] = static_cast<std::uint8_t>(seq >> (8 * i));
-  return f;
-}
-
-std::uint32_t frame_seq(const std::uint8_t* f) {
-  return static_cast<std::uint32_t>(f[0]) | static_cast<std::uint32_t>(f[1]) << 8 |
-         static_cast<std::uint32_t>(f[2]) << 16 | static_cast<std::uint32_t>(f[3]) << 24;
-}
 
 // A pseudo-terminal whose master end the test holds; the link opens slave_path().
 class Pty {

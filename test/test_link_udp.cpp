@@ -17,20 +17,14 @@
 #include <gtest/gtest.h>
 
 #include "rgbd_odometry/link.hpp"
+#include "link_test_frames.hpp"
 
 namespace rgbdo {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
+using link_test::Bytes;
+using link_test::make_frame;
 using Clock = std::chrono::steady_clock;
-
-// A frame that says which one it is: the sequence number, then a pattern derived from it.
-Bytes make_frame(std::uint32_t seq, std::size_t size) {
-  Bytes f(size);
-  for (std::size_t i = 0; i < size; ++i) f[i] = static_cast<std::uint8_t>(seq * 31 + i * 7);
-  for (std::size_t i = 0; i < 4 && i < size; ++i) f[i] = static_cast<std::uint8_t>(seq >> (8 * i));
-  return f;
-}
 
 // A UDP socket bound on the loopback address: the flight computer's end.
 class Receiver {

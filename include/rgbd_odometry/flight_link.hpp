@@ -33,8 +33,8 @@ class FlightLink {
   void send(std::size_t bytes);
 
   LinkConfig config_;
+  LinkOptions options_;  // parsed once: the link is opened from it
   std::unique_ptr<OutputLink> link_;
-  LinkOptions options_;
   OdometryMessageBuilder builder_;
   mavlink::Framer framer_;
   std::array<std::uint8_t, mavlink::kMaxFrameBytes> buffer_{};
