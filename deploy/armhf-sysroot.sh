@@ -20,7 +20,7 @@ packages=(
   libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
-recipe_version=3
+recipe_version=4
 want="v$recipe_version $(printf '%s ' "${packages[@]}")"
 stamp="$dest/.rgbdo-sysroot"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
@@ -61,6 +61,12 @@ for lib in blas lapack; do
     ln -sfn "$provider" "$libdir/lib$lib.so.3"
   fi
 done
+
+# mmdebstrap leaves device nodes in dev/. qemu-arm-static -L looks every path up in the sysroot
+# first, so the armhf tests would open the sysroot's dev/ptmx, dev/null... and on a filesystem
+# mounted nodev (as build trees often are) that fails with ENODEV. Without them qemu falls
+# through to the host's /dev. Nothing is compiled or linked against dev/.
+rm -rf "${tmp:?}/dev"
 
 echo "$want" > "$tmp/.rgbdo-sysroot"
 rm -rf "$dest"

@@ -142,6 +142,12 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
   (void)s.colour.setMirroringEnabled(false);
   (void)s.depth.setMirroringEnabled(false);
   s.uri = s.device.getDeviceInfo().getUri();
+  // The recorder starts before the streams do, so that their first frames are in the file.
+  if (!options.record_path.empty() &&
+      (s.recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
+       s.recorder.attach(s.colour) != openni::STATUS_OK || s.recorder.attach(s.depth) != openni::STATUS_OK ||
+       s.recorder.start() != openni::STATUS_OK))
+    throw SourceError("cannot record to '" + options.record_path + "': " + openni::OpenNI::getExtendedError());
   if (openni::OpenNI::addDeviceDisconnectedListener(impl_.get()) != openni::STATUS_OK)
     throw SourceError("cannot watch the OpenNI2 device for disconnection");
   if (s.colour.start() != openni::STATUS_OK || s.depth.start() != openni::STATUS_OK) {
@@ -149,14 +155,6 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
     throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
   }
   for (auto& slot : s.depth_history) slot.depth_m.create(options.height, options.width, CV_32FC1);
-  if (!options.record_path.empty()) {
-    if (s.recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
-        s.recorder.attach(s.colour) != openni::STATUS_OK || s.recorder.attach(s.depth) != openni::STATUS_OK ||
-        s.recorder.start() != openni::STATUS_OK) {
-      openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
-      throw SourceError("cannot record to '" + options.record_path + "': " + openni::OpenNI::getExtendedError());
-    }
-  }
 }
 
 OpenNiSource::~OpenNiSource() {

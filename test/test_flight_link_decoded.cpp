@@ -10,7 +10,9 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -115,7 +117,7 @@ TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
   const fs::path dir = scratch("pty");
   int master = -1, slave = -1;
   char slave_path[256] = {};
-  ASSERT_EQ(::openpty(&master, &slave, slave_path, nullptr, nullptr), 0);
+  ASSERT_EQ(::openpty(&master, &slave, slave_path, nullptr, nullptr), 0) << "openpty: " << std::strerror(errno);
   termios raw{};
   ::tcgetattr(master, &raw);
   ::cfmakeraw(&raw);

@@ -14,14 +14,17 @@
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <new>
 #include <thread>
 
 #include <gtest/gtest.h>
 
 #include "rgbd_odometry/link.hpp"
+#include "pty_test_env.hpp"
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -69,10 +72,11 @@ TEST(LinkAllocations, UdpSendToARefusingPeerAllocatesNothing) {
 TEST(LinkAllocations, SerialSendToAPeerThatDoesNotReadAllocatesNothing) {
   int master = -1, slave = -1;
   char name[256] = {};
-  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
+  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0) << "openpty: " << std::strerror(errno);
   ::close(slave);
   SerialLinkOptions o;
   o.device_path = name;
+  o.baud = link_test::fastest_test_baud();
   o.queue_frames = 16;
   const auto link = open_serial_link(o);
   const long n = allocations_during([&] {

@@ -105,8 +105,24 @@ TEST_F(VirtualSensor, DeliversTheRecordingAtItsTimesWithItsContent) {
     // Device time starts at the first event of either stream (fr1: depth, 15 ms earlier).
     EXPECT_NEAR(static_cast<double>(c.timestamps_us[i] - c.timestamps_us[0]), static_cast<double>(expected_us), 1.0);
   }
-  // Real time: the 40 frames span 1.30 s as recorded, 1.30 / rate here.
-  EXPECT_NEAR(c.arrival_s.back() - c.arrival_s.front(), 1.30 / kRate, 0.2 * 1.30 / kRate);
+  // Real time: arrivals follow the recorded times, scaled by 1 / rate. The pace is the slope of
+  // a least-squares line through all 40 (recorded, arrival) points, so one reader thread woken
+  // late on a loaded machine moves it by a few per cent, not the whole verdict; a driver that
+  // ignored the recorded times (or the rate) would be off by far more than 15 %.
+  double mean_t = 0, mean_a = 0;
+  for (size_t i = 0; i < c.indices.size(); ++i) {
+    mean_t += static_cast<double>(c.timestamps_us[i] - c.timestamps_us[0]) * 1e-6;
+    mean_a += c.arrival_s[i];
+  }
+  mean_t /= static_cast<double>(c.indices.size());
+  mean_a /= static_cast<double>(c.indices.size());
+  double covariance = 0, variance = 0;
+  for (size_t i = 0; i < c.indices.size(); ++i) {
+    const double dt = static_cast<double>(c.timestamps_us[i] - c.timestamps_us[0]) * 1e-6 - mean_t;
+    covariance += dt * (c.arrival_s[i] - mean_a);
+    variance += dt * dt;
+  }
+  EXPECT_NEAR(covariance / variance, 1.0 / kRate, 0.15 / kRate) << "seconds of arrival per recorded second";
   // Content: colour as recorded (RGB order), depth in 100 um units = TUM raw x 2.
   cv::Mat expected_colour = cv::imread(seq.frames[0].colour_path, cv::IMREAD_COLOR);
   cv::cvtColor(expected_colour, expected_colour, cv::COLOR_BGR2RGB);
