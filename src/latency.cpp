@@ -6,11 +6,14 @@
 namespace rgbdo {
 
 void LatencyHistogram::add(double latency_ms) {
-  const double clamped = std::max(0.0, latency_ms);
-  const int bin = std::min(kBins - 1, static_cast<int>(clamped / kBinMs));
+  if (!(latency_ms >= 0)) {  // NaN too
+    ++ahead_;
+    return;
+  }
+  const int bin = static_cast<int>(std::min(static_cast<double>(kBins - 1), latency_ms / kBinMs));
   ++bins_[static_cast<size_t>(bin)];
   ++count_;
-  max_ms_ = std::max(max_ms_, clamped);
+  max_ms_ = std::max(max_ms_, latency_ms);
 }
 
 double LatencyHistogram::quantile_ms(double q) const {
@@ -20,7 +23,8 @@ double LatencyHistogram::quantile_ms(double q) const {
   std::uint64_t seen = 0;
   for (int b = 0; b < kBins; ++b) {
     seen += bins_[static_cast<size_t>(b)];
-    if (seen >= rank) return std::min((b + 0.5) * kBinMs, max_ms_);
+    // In the last bin (2 s and later) only the maximum is known: an upper bound, not a guess.
+    if (seen >= rank) return b == kBins - 1 ? max_ms_ : std::min((b + 0.5) * kBinMs, max_ms_);
   }
   return max_ms_;
 }

@@ -196,10 +196,14 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   bool have_colour = false;
   std::int64_t colour_t = 0;
   // One wait for any stream, in slices; -1: the budget ran out, -2: interrupted or unplugged.
+  // Frames that arrived before an unplug are still read: they are as good as any other (the
+  // virtual sensor unplugs itself right after the last frame of its recording).
   const auto wait_for_stream = [&](int budget_ms) {
     for (int waited = 0; waited < budget_ms; waited += kWaitSliceMs) {
-      if (s.interrupted || s.unplugged) return -2;
+      if (s.interrupted) return -2;
       int ready = -1;
+      if (s.unplugged)
+        return openni::OpenNI::waitForAnyStream(streams, 2, &ready, 0) == openni::STATUS_OK ? ready : -2;
       if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, std::min(kWaitSliceMs, budget_ms - waited)) ==
           openni::STATUS_OK)
         return ready;
@@ -211,6 +215,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   while (!(have_colour && depth_at_or_after(colour_t))) {
     const int ready = wait_for_stream(have_colour ? s.options.pairing_wait_ms : s.options.frame_timeout_ms);
     if (ready == -2) {
+      if (have_colour && !s.interrupted) break;  // unplugged: the frame in hand goes out first
       problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
       return false;
     }

@@ -9,17 +9,21 @@ namespace rgbdo {
 class LatencyHistogram {
  public:
   static constexpr double kBinMs = 0.1;
-  static constexpr int kBins = 20000;  // 2 s; anything later lands in the last bin
+  static constexpr int kBins = 20000;  // 2 s; anything later lands in the last bin (quantile: the max)
 
+  // A negative latency (capture time ahead of the host clock) is not a latency: the device's
+  // clock runs at another rate than the host's (the virtual sensor at rate != 1 keeps the
+  // recording's times). It is counted apart, never binned as 0.
   void add(double latency_ms);
-  std::uint64_t count() const { return count_; }
+  std::uint64_t count() const { return count_; }  // latencies measured
+  std::uint64_t ahead_of_clock() const { return ahead_; }
   double max_ms() const { return max_ms_; }
   // The q-quantile (0..1) to within one bin; 0 when empty.
   double quantile_ms(double q) const;
 
  private:
   std::array<std::uint32_t, kBins> bins_{};
-  std::uint64_t count_ = 0;
+  std::uint64_t count_ = 0, ahead_ = 0;
   double max_ms_ = 0;
 };
 
