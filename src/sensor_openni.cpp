@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "rgbd_odometry/device_clock.hpp"
 #include "rgbd_odometry/tum_sequence.hpp"  // SourceError
 
 namespace rgbdo {
@@ -61,12 +62,10 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   openni::VideoStream colour, depth;
   openni::Recorder recorder;
   double depth_m_per_unit = 0.001;
-  // Device microseconds -> host nanoseconds with one offset, measured at the first frame: the
-  // intervals stay exactly the device's (odometry divides by them); the host times carry a
-  // constant bias, the first frame's transport delay. (Refining the offset would shift the
-  // interval it happens in, which the timing compensation would feel.)
-  bool have_offset = false;
-  std::int64_t offset_ns = 0;
+  // Device microseconds -> host nanoseconds: anchored at the first frame's arrival, then
+  // following the crystal's rate against the host's (src/device_clock.cpp). Intervals stay the
+  // device's to parts per million (odometry divides by them), host times do not walk away.
+  DeviceClock clock;
   struct DepthSlot {
     std::int64_t t_ns = 0;
     cv::Mat depth_m;
@@ -82,10 +81,7 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   }
 
   std::int64_t to_host(std::uint64_t device_us) {
-    const std::int64_t device_ns = static_cast<std::int64_t>(device_us) * 1000;
-    if (!have_offset) offset_ns = host_now_ns() - device_ns;
-    have_offset = true;
-    return device_ns + offset_ns;
+    return clock.to_host(static_cast<std::int64_t>(device_us) * 1000, host_now_ns());
   }
 };
 

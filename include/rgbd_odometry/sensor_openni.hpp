@@ -4,9 +4,9 @@
 //
 // Colour and depth arrive as separate streams. Each colour frame is paired with the depth
 // frame nearest in device time (at most 20 ms apart, as the TUM association), device time is
-// mapped onto the host's monotonic clock with an offset fixed at the first frame (intervals
-// exact; host times biased by that frame's transport delay), and gaps in the colour frame
-// indices count as dropped frames.
+// mapped onto the host's monotonic clock (DeviceClock: anchored at the first frame, biased by
+// its transport delay, following the crystal's drift), and gaps in the colour frame indices
+// count as dropped frames.
 #include <cstdint>
 #include <memory>
 #include <string>
