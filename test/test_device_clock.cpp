@@ -36,14 +36,20 @@ std::vector<Capture> simulate(double seconds, double drift, std::uint32_t seed) 
   return out;
 }
 
+// Host times of every frame, in order, as the source would map them.
+std::vector<std::int64_t> map_all(DeviceClock& clock, const std::vector<Capture>& frames) {
+  std::vector<std::int64_t> mapped;
+  for (const auto& f : frames) mapped.push_back(clock.to_host(f.device_ns, f.arrival_host_ns));
+  return mapped;
+}
+
 class DriftingCrystal : public ::testing::TestWithParam<double> {};
 
 TEST_P(DriftingCrystal, CaptureTimesStayOnTheHostClockForAnHourWithIntervalsIntact) {
   const double drift = GetParam();
   const auto frames = simulate(3600, drift, 7);
   DeviceClock clock;
-  std::vector<std::int64_t> mapped;
-  for (const auto& f : frames) mapped.push_back(clock.to_host(f.device_ns, f.arrival_host_ns));
+  const std::vector<std::int64_t> mapped = map_all(clock, frames);
 
   // The mapping keeps two constant biases: the first frame's transport delay, and the drift
   // of the first two windows (10 s), before the rate is known. Beyond them it must follow the
@@ -75,14 +81,10 @@ INSTANTIATE_TEST_SUITE_P(PartsPerMillion, DriftingCrystal, ::testing::Values(50e
 TEST(DeviceClock, AnExactCrystalKeepsTheDeviceIntervals) {
   const auto frames = simulate(600, 0, 11);
   DeviceClock clock;
-  std::int64_t previous = 0;
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const std::int64_t host = clock.to_host(frames[i].device_ns, frames[i].arrival_host_ns);
-    if (i > 0) {
-      const double device_dt = static_cast<double>(frames[i].device_ns - frames[i - 1].device_ns);
-      EXPECT_NEAR(static_cast<double>(host - previous), device_dt, 100.0) << "frame " << i;  // 0.1 us of 33 ms
-    }
-    previous = host;
+  const std::vector<std::int64_t> mapped = map_all(clock, frames);
+  for (size_t i = 1; i < frames.size(); ++i) {
+    const double device_dt = static_cast<double>(frames[i].device_ns - frames[i - 1].device_ns);
+    EXPECT_NEAR(static_cast<double>(mapped[i] - mapped[i - 1]), device_dt, 100.0) << "frame " << i;  // 0.1 us of 33 ms
   }
   EXPECT_LT(std::fabs(clock.skew()), 2e-6);
 }
@@ -91,14 +93,9 @@ TEST(DeviceClock, AClockRunningAtAnotherSpeedIsNotFollowedAndSaysSo) {
   // The virtual sensor at rate=2: recorded seconds pass twice as fast as host seconds.
   const auto frames = simulate(60, 1.0, 3);
   DeviceClock clock;
-  std::int64_t previous = 0;
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const std::int64_t host = clock.to_host(frames[i].device_ns, frames[i].arrival_host_ns);
-    if (i > 0) {
-      EXPECT_EQ(host - previous, frames[i].device_ns - frames[i - 1].device_ns) << "frame " << i;
-    }
-    previous = host;
-  }
+  const std::vector<std::int64_t> mapped = map_all(clock, frames);
+  for (size_t i = 1; i < frames.size(); ++i)
+    EXPECT_EQ(mapped[i] - mapped[i - 1], frames[i].device_ns - frames[i - 1].device_ns) << "frame " << i;
   EXPECT_TRUE(clock.implausible_skew());
   EXPECT_EQ(clock.skew(), 0.0);
 }
