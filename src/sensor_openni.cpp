@@ -74,6 +74,12 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   int depth_count = 0;
   int last_colour_index = -1;
   int dropped = 0;
+  // A recording played by OniFile at "manual" speed: it reads the next frame of the file each
+  // time a wait finds no frame ready ("pokes" the device). Its frames must be waited for in one
+  // wait each: a second poke while the player is still decoding makes it deliver two frames,
+  // and the first is overwritten before it is read (seen under load).
+  bool playback = false;
+  int colour_frames_in_file = 0, colour_frames_read = 0;
 
   // Called on an OpenNI2 thread when any device goes away.
   void onDeviceDisconnected(const openni::DeviceInfo* info) override {
@@ -117,7 +123,7 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
   if (s.colour.create(s.device, openni::SENSOR_COLOR) != openni::STATUS_OK ||
       s.depth.create(s.device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
     throw SourceError(std::string("cannot create the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
-  const bool playback = s.device.isFile();
+  const bool playback = s.playback = s.device.isFile();
   // A recording plays in the modes it was recorded in (choose_mode checked them above).
   if (!playback &&
       (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK))
@@ -127,6 +133,7 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
     // losslessly, at the pace of the pipeline, as a TUM sequence is.
     s.device.getPlaybackControl()->setRepeatEnabled(false);
     s.device.getPlaybackControl()->setSpeed(-1.0f);
+    s.colour_frames_in_file = s.device.getPlaybackControl()->getNumberOfFrames(s.colour);
   }
   if (options.registration && !playback) {  // a recording is registered, or not, already
     if (!s.device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ||
@@ -195,6 +202,11 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   // Frames that arrived before an unplug are still read: they are as good as any other (the
   // virtual sensor unplugs itself right after the last frame of its recording).
   const auto wait_for_stream = [&](int budget_ms) {
+    if (s.playback) {
+      if (s.interrupted) return -2;
+      int ready = -1;
+      return openni::OpenNI::waitForAnyStream(streams, 2, &ready, budget_ms) == openni::STATUS_OK ? ready : -1;
+    }
     for (int waited = 0; waited < budget_ms; waited += kWaitSliceMs) {
       if (s.interrupted) return -2;
       int ready = -1;
@@ -208,6 +220,10 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   };
   // Collect until a colour frame is in hand and a depth frame at or after it has arrived
   // (the nearest depth can come up to 17 ms after its colour frame), or the wait runs out.
+  if (s.playback && s.colour_frames_read >= s.colour_frames_in_file) {
+    problem = "all " + std::to_string(s.colour_frames_in_file) + " colour frames of the file read";
+    return false;
+  }
   while (!(have_colour && depth_at_or_after(colour_t))) {
     const int ready = wait_for_stream(have_colour ? s.options.pairing_wait_ms : s.options.frame_timeout_ms);
     if (ready == -2) {
@@ -236,6 +252,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                       static_cast<size_t>(frame.getStrideInBytes()));
     cv::cvtColor(rgb, out.gray, cv::COLOR_RGB2GRAY);
+    ++s.colour_frames_read;
     have_colour = true;
     colour_t = t;
   }
