@@ -79,7 +79,7 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   // wait each: a second poke while the player is still decoding makes it deliver two frames,
   // and the first is overwritten before it is read (seen under load).
   bool playback = false;
-  int colour_frames_in_file = 0, colour_frames_read = 0;
+  int colour_frames_in_file = 0, colour_frames_read = 0, depth_frames_in_file = 0;
 
   // Called on an OpenNI2 thread when any device goes away.
   void onDeviceDisconnected(const openni::DeviceInfo* info) override {
@@ -134,6 +134,7 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
     s.device.getPlaybackControl()->setRepeatEnabled(false);
     s.device.getPlaybackControl()->setSpeed(-1.0f);
     s.colour_frames_in_file = s.device.getPlaybackControl()->getNumberOfFrames(s.colour);
+    s.depth_frames_in_file = s.device.getPlaybackControl()->getNumberOfFrames(s.depth);
   }
   if (options.registration && !playback) {  // a recording is registered, or not, already
     if (!s.device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ||
@@ -225,7 +226,11 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     return false;
   }
   while (!(have_colour && depth_at_or_after(colour_t))) {
-    const int ready = wait_for_stream(have_colour ? s.options.pairing_wait_ms : s.options.frame_timeout_ms);
+    // A recording holds its next depth frame unless all were read: wait for it as for any frame,
+    // so that pairing never depends on how fast the player decodes.
+    if (have_colour && s.playback && s.depth_count >= s.depth_frames_in_file) break;
+    const int ready = wait_for_stream(have_colour && !s.playback ? s.options.pairing_wait_ms
+                                                                  : s.options.frame_timeout_ms);
     if (ready == -2) {
       if (have_colour && !s.interrupted) break;  // unplugged: the frame in hand goes out first
       problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
