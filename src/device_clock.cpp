@@ -19,6 +19,7 @@ std::int64_t DeviceClock::to_host(std::int64_t device_ns, std::int64_t arrival_h
     return anchor_host_ns_ +
            static_cast<std::int64_t>(std::llround(static_cast<double>(device_ns - anchor_device_ns_) * (1.0 + skew_)));
   };
+  if (!follow_rate_) return mapped();
   if (device_ns - window_start_ns_ < kWindowNs) {
     if (offset < window_min_ns_) {
       window_min_ns_ = offset;

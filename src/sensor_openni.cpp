@@ -77,7 +77,8 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   // A recording played by OniFile at "manual" speed: it reads the next frame of the file each
   // time a wait finds no frame ready ("pokes" the device). Its frames must be waited for in one
   // wait each: a second poke while the player is still decoding makes it deliver two frames,
-  // and the first is overwritten before it is read (seen under load).
+  // and the first is overwritten before it is read (the likely cause of frames lost from a
+  // playback under load).
   bool playback = false;
   int colour_frames_in_file = 0, colour_frames_read = 0, depth_frames_in_file = 0;
 
@@ -124,6 +125,7 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
       s.depth.create(s.device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
     throw SourceError(std::string("cannot create the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
   const bool playback = s.playback = s.device.isFile();
+  s.clock = DeviceClock(/*follow_rate=*/!playback);
   // A recording plays in the modes it was recorded in (choose_mode checked them above).
   if (!playback &&
       (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK))
@@ -199,7 +201,8 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   };
   bool have_colour = false;
   std::int64_t colour_t = 0;
-  // One wait for any stream, in slices; -1: the budget ran out, -2: interrupted or unplugged.
+  // One wait for any stream, in slices (one wait for a recording, see Impl::playback); -1: the
+  // budget ran out, -2: interrupted or unplugged.
   // Frames that arrived before an unplug are still read: they are as good as any other (the
   // virtual sensor unplugs itself right after the last frame of its recording).
   const auto wait_for_stream = [&](int budget_ms) {

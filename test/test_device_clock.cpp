@@ -100,6 +100,21 @@ TEST(DeviceClock, AClockRunningAtAnotherSpeedIsNotFollowedAndSaysSo) {
   EXPECT_EQ(clock.skew(), 0.0);
 }
 
+TEST(DeviceClock, ARecordingIsNeverFollowed) {
+  // Played back at a reader's pace that happens to be 500 ppm off the recording's: a crystal
+  // could be that far off, but a recording's intervals must stay exactly the recorded ones.
+  const auto frames = simulate(120, 500e-6, 5);
+  DeviceClock clock(/*follow_rate=*/false);
+  const std::vector<std::int64_t> mapped = map_all(clock, frames);
+  for (size_t i = 1; i < frames.size(); ++i)
+    EXPECT_EQ(mapped[i] - mapped[i - 1], frames[i].device_ns - frames[i - 1].device_ns) << "frame " << i;
+  EXPECT_EQ(clock.skew(), 0.0);
+  // The same capture, followed, does change the intervals: the test above can fail.
+  DeviceClock following;
+  map_all(following, frames);
+  EXPECT_NEAR(following.skew(), -500e-6, 5e-6);
+}
+
 TEST(DeviceClock, TheFirstFrameIsMappedToItsArrival) {
   DeviceClock clock;
   EXPECT_EQ(clock.to_host(42'000, 7'000'000'000), 7'000'000'000);

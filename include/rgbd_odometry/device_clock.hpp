@@ -12,7 +12,9 @@
 //
 // A rate further from the host's than a crystal can be (over 1000 ppm) is not followed: it is
 // a device clock that runs at another speed on purpose (the virtual sensor at rate != 1 keeps
-// the recording's times), reported by implausible_skew().
+// the recording's times), reported by implausible_skew(). A recording played back is never
+// followed (follow_rate false): it arrives at the reader's pace, which says nothing about
+// any crystal, and its intervals must stay exactly the recorded ones.
 #include <cstdint>
 
 namespace rgbdo {
@@ -25,6 +27,8 @@ class DeviceClock {
   // rate wanders with its temperature.
   static constexpr double kForget = 0.98;
 
+  explicit DeviceClock(bool follow_rate = true) : follow_rate_(follow_rate) {}
+
   // Host time of a frame captured at `device_ns` (device clock) that arrived at `arrival_host_ns`.
   std::int64_t to_host(std::int64_t device_ns, std::int64_t arrival_host_ns);
 
@@ -32,7 +36,7 @@ class DeviceClock {
   bool implausible_skew() const { return implausible_; }
 
  private:
-  bool started_ = false;
+  bool follow_rate_ = true, started_ = false;
   std::int64_t anchor_device_ns_ = 0, anchor_host_ns_ = 0;
   double skew_ = 0;
   bool implausible_ = false;
