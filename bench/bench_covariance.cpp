@@ -7,8 +7,8 @@
 #include <Eigen/Geometry>
 #include <random>
 
-#include "rgbd_odometry/covariance.hpp"
-#include "rgbd_odometry/noise_model.hpp"
+#include "rgbd_odometry/pipeline/covariance.hpp"
+#include "rgbd_odometry/core/noise_model.hpp"
 
 namespace rgbdo {
 namespace {

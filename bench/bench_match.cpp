@@ -7,9 +7,9 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "kernels.hpp"
-#include "rgbd_odometry/match.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "rgbd_odometry/pipeline/match.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
 
 namespace rgbdo {
 namespace {

@@ -6,10 +6,12 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 
-#include "rgbd_odometry/mask.hpp"
-#include "rgbd_odometry/odometry.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
-#include "rgbd_odometry/umeyama.hpp"
+#include "rgbd_odometry/pipeline/mask.hpp"
+#include "rgbd_odometry/pipeline/odometry.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/core/umeyama.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 namespace rgbdo {
 namespace {
@@ -28,11 +30,11 @@ struct Fixture {
   Fixture() : config(load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml")) {
     cv::setNumThreads(1);
     const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
-    OdometryPipeline pipeline(config);
+    FrameExtractor extractor(config);
     for (int i = 0; i < kFrames; ++i) {
       frames.push_back(load_tum_frame(seq.frames[static_cast<size_t>(i)], config.depth.units_per_m, 640, 480));
       processed.emplace_back();
-      pipeline.extract(frames.back(), processed.back());
+      extractor.extract(frames.back(), processed.back());
     }
     SymmetricMatcher(config.matching.ratio).match(processed[0].features.descriptors, processed[1].features.descriptors, matches);
     build_point_pairs(matches, processed[0].geometry, processed[0].times, processed[1].geometry, processed[1].times,
@@ -56,11 +58,11 @@ const Fixture& fixture() {
 
 void BM_Detect(benchmark::State& state) {
   const auto& f = fixture();
-  OdometryPipeline pipeline(f.config);
+  FrameExtractor extractor(f.config);
   ProcessedFrame out;
   size_t i = 0;
   for (auto _ : state) {
-    pipeline.extract(f.frames[i++ % f.frames.size()], out);
+    extractor.extract(f.frames[i++ % f.frames.size()], out);
     benchmark::DoNotOptimize(out.features.keypoints.data());
   }
   state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);

@@ -8,8 +8,8 @@
 #include <Eigen/Geometry>
 #include <random>
 
-#include "rgbd_odometry/geometry.hpp"
-#include "rgbd_odometry/ransac.hpp"
+#include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/pipeline/ransac.hpp"
 
 namespace rgbdo {
 namespace {

@@ -1,6 +1,7 @@
-#include "kernels.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
 
 #include <cstdlib>
+#include <string>
 #include <string_view>
 
 #if defined(__arm__) || defined(__aarch64__)
@@ -14,7 +15,7 @@ namespace {
 constexpr KernelSet kSets[] = {
 #if defined(RGBDO_X86_KERNELS)
     {"avx2", nearest_two_hamming_avx2, perturbation_sums_avx2, score_rigid_avx2},
-    {"sse4.2-popcnt", nearest_two_hamming_popcnt, perturbation_sums_scalar, score_rigid_scalar},
+    {"sse42", nearest_two_hamming_popcnt, perturbation_sums_scalar, score_rigid_scalar},
 #endif
 #if defined(RGBDO_NEON_KERNELS)
     {"neon", nearest_two_hamming_neon, perturbation_sums_neon, score_rigid_neon},
@@ -31,7 +32,7 @@ bool cpu_supports(const KernelSet& set) {
   if (name == "scalar") return true;
 #if defined(RGBDO_X86_KERNELS)
   if (name == "avx2") return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
-  if (name == "sse4.2-popcnt") return __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
+  if (name == "sse42") return __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
 #endif
 #if defined(RGBDO_NEON_KERNELS)
 #if defined(__aarch64__)
@@ -43,18 +44,49 @@ bool cpu_supports(const KernelSet& set) {
   return false;
 }
 
-bool scalar_forced() {
+std::string requested_kernels() {
+  if (const char* named = std::getenv("RGBDO_KERNELS"); named != nullptr && *named != '\0') return named;
   const char* v = std::getenv("RGBDO_FORCE_SCALAR");
-  return v != nullptr && *v != '\0' && std::string_view(v) != "0";
+  if (v != nullptr && *v != '\0' && std::string_view(v) != "0") return "scalar";
+  return {};
+}
+
+namespace {
+
+const KernelSet* find_compiled(std::string_view name) {
+  for (const auto& s : compiled_kernel_sets())
+    if (name == s.name) return &s;
+  return nullptr;
+}
+
+std::string runnable_names() {
+  std::string names;
+  for (const auto& s : compiled_kernel_sets())
+    if (cpu_supports(s)) names += (names.empty() ? "" : ", ") + std::string(s.name);
+  return names;
+}
+
+}  // namespace
+
+std::string kernel_request_problem() {
+  const std::string wanted = requested_kernels();
+  if (wanted.empty()) return {};
+  const KernelSet* set = find_compiled(wanted);
+  if (set == nullptr)
+    return "RGBDO_KERNELS=" + wanted + ": no such kernel set in this " + build_architecture() +
+           " build (it has: " + runnable_names() + ")";
+  if (!cpu_supports(*set))
+    return "RGBDO_KERNELS=" + wanted + ": this CPU cannot run that set (it can run: " + runnable_names() + ")";
+  return {};
 }
 
 const KernelSet& active_kernels() {
-  static const KernelSet& chosen = [&]() -> const KernelSet& {
-    const auto sets = compiled_kernel_sets();
-    if (!scalar_forced())
-      for (const auto& s : sets)
-        if (cpu_supports(s)) return s;
-    return sets.back();
+  static const KernelSet& chosen = []() -> const KernelSet& {
+    if (kernel_request_problem().empty())
+      if (const KernelSet* named = find_compiled(requested_kernels())) return *named;
+    for (const auto& s : compiled_kernel_sets())
+      if (cpu_supports(s)) return s;
+    return compiled_kernel_sets().back();
   }();
   return chosen;
 }

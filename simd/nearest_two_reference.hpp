@@ -1,13 +1,19 @@
 #pragma once
-// The reference nearest-two algorithm as an inline template, so that the scalar set and
-// the x86 popcnt set compile the very same loop (the latter with the POPCNT instruction).
-// Every SIMD kernel must reproduce its output bit for bit, ties included.
+// The reference nearest-two algorithm, so that the scalar set and the x86 popcnt set compile
+// the very same loop (the latter with the POPCNT instruction). Every SIMD kernel must
+// reproduce its output bit for bit, ties included.
+//
+// Translation units with different instruction-set flags include this file, so its functions
+// have internal linkage (an unnamed namespace): with plain `inline` the linker would keep one
+// weak copy for all of them, and an unoptimised build could run the POPCNT copy inside the
+// scalar kernel, on a CPU without the instruction.
 #include <bit>
 #include <cstring>
 
-#include "nearest_two.hpp"
+#include "rgbd_odometry/simd/nearest_two.hpp"
 
 namespace rgbdo::simd::reference {
+namespace {
 
 inline std::uint32_t hamming(const std::uint8_t* a, const std::uint8_t* b, int bytes) {
   std::uint32_t d = 0;
@@ -22,17 +28,8 @@ inline std::uint32_t hamming(const std::uint8_t* a, const std::uint8_t* b, int b
   return d;
 }
 
-// Strict '<' keeps the lowest index among equal distances; a distance equal to the best
-// becomes the second.
-inline void update(NearestTwo& n, std::uint32_t d, int index) {
-  if (d < n.best) {
-    n.second = n.best;
-    n.best = d;
-    n.best_index = index;
-  } else if (d < n.second) {
-    n.second = d;
-  }
-}
+// The record-keeping rule of nearest_two.hpp.
+inline void update(NearestTwo& n, std::uint32_t d, int index) { keep_nearest_two(n, d, index); }
 
 inline void nearest_two(const std::uint8_t* query, int n_query, std::size_t query_stride, const std::uint8_t* train,
                         int n_train, std::size_t train_stride, int bytes, NearestTwo* query_out,
@@ -68,4 +65,5 @@ inline NearestTwo merge_lanes(const std::uint32_t* best, const std::uint32_t* se
   return out;
 }
 
+}  // namespace
 }  // namespace rgbdo::simd::reference

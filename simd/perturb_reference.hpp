@@ -1,23 +1,21 @@
 #pragma once
 // Scalar building blocks of the perturbation kernel (see perturb.hpp), shared by the scalar
 // reference and as the specification every SIMD twin mirrors operation by operation.
+// Internal linkage (an unnamed namespace): each translation unit, compiled with its own
+// instruction-set flags, keeps its own copy (see nearest_two_reference.hpp).
 #include <cstdint>
 #include <cstring>
 
-#include "perturb.hpp"
+#include "rgbd_odometry/simd/perturb.hpp"
+#include "rgbd_odometry/core/splitmix64.hpp"
 
 namespace rgbdo::simd::reference {
+namespace {
 
 // Seeds lane l's xoshiro128+ state from the kernel seed (splitmix64, never all zero).
 inline void seed_lane(std::uint64_t seed, int lane, std::uint32_t state[4]) {
   std::uint64_t x = seed ^ (0xD1B54A32D192ED03ULL * static_cast<std::uint64_t>(lane + 1));
-  for (int i = 0; i < 4; ++i) {
-    x += 0x9E3779B97F4A7C15ULL;
-    std::uint64_t z = x;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    state[i] = static_cast<std::uint32_t>((z ^ (z >> 31)) >> 32) | (i == 0 ? 1u : 0u);
-  }
+  for (int i = 0; i < 4; ++i) state[i] = static_cast<std::uint32_t>(splitmix64_next(x) >> 32) | (i == 0 ? 1u : 0u);
 }
 
 inline std::uint32_t next(std::uint32_t s[4]) {  // xoshiro128+
@@ -82,4 +80,5 @@ inline void box_muller(std::uint32_t a, std::uint32_t b, float& z0, float& z1) {
   z1 = r * s;
 }
 
+}  // namespace
 }  // namespace rgbdo::simd::reference

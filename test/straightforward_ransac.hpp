@@ -7,11 +7,11 @@
 #include <cmath>
 #include <vector>
 
-#include "rgbd_odometry/config.hpp"
-#include "rgbd_odometry/noise_model.hpp"
-#include "rgbd_odometry/rng.hpp"
-#include "rgbd_odometry/status.hpp"
-#include "rgbd_odometry/umeyama.hpp"
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/core/rng.hpp"
+#include "rgbd_odometry/core/status.hpp"
+#include "rgbd_odometry/core/umeyama.hpp"
 
 namespace rgbdo {
 

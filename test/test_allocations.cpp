@@ -13,9 +13,12 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "rgbd_odometry/integrate.hpp"
-#include "rgbd_odometry/odometry.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/integrate.hpp"
+#include "rgbd_odometry/pipeline/odometry.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/pair_estimator.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 extern "C" {
 void* __libc_malloc(size_t);
@@ -88,20 +91,21 @@ TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {
   std::vector<RgbdFrame> frames;  // decoded up front: PNG decoding is not the hot path
   for (const auto& ref : seq.frames) frames.push_back(load_tum_frame(ref, config.depth.units_per_m, 640, 480));
 
-  OdometryPipeline pipeline(config);
+  FrameExtractor extractor(config);
+  PairEstimator estimator(config);
   TrajectoryIntegrator integrator;
   ProcessedFrame prev, curr;
   constexpr size_t kWarmUp = 10;
   long pair_allocations = 0, integrate_allocations = 0, extract_allocations = 0, extract_bytes = 0;
   int measured = 0, ok = 0;
-  pipeline.extract(frames[0], prev);
+  extractor.extract(frames[0], prev);
   for (size_t i = 1; i < frames.size(); ++i) {
     const Counter extract;
-    pipeline.extract(frames[i], curr);
+    extractor.extract(frames[i], curr);
     const long ea = extract.allocations(), eb = extract.bytes();
 
     const Counter pair;
-    const PairResult r = pipeline.estimate(prev, curr, i);
+    const PairResult r = estimator.estimate(prev, curr, i);
     const long pa = pair.allocations();
 
     const Counter integrate;

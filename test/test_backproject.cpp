@@ -2,7 +2,7 @@
 
 #include <opencv2/calib3d.hpp>
 
-#include "rgbd_odometry/backproject.hpp"
+#include "rgbd_odometry/pipeline/backproject.hpp"
 
 namespace rgbdo {
 namespace {

@@ -3,7 +3,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rgbd_odometry/config.hpp"
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 namespace rgbdo {
 namespace {

@@ -4,11 +4,11 @@
 
 #include <Eigen/Geometry>
 
-#include "kernels.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
 #include "perturb_reference.hpp"
-#include "rgbd_odometry/covariance.hpp"
-#include "rgbd_odometry/noise_model.hpp"
-#include "rgbd_odometry/umeyama.hpp"
+#include "rgbd_odometry/pipeline/covariance.hpp"
+#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/core/umeyama.hpp"
 
 namespace rgbdo {
 namespace {

@@ -1,4 +1,4 @@
-// Device-to-host clock mapping (src/device_clock.cpp) on simulated hour-long captures: a
+// Device-to-host clock mapping (src/sensor/device_clock.cpp) on simulated hour-long captures: a
 // crystal off by tens of ppm, USB transport delays with a floor and a long tail, and a clock
 // that runs at another speed on purpose (the virtual sensor at rate != 1).
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "rgbd_odometry/device_clock.hpp"
+#include "rgbd_odometry/sensor/device_clock.hpp"
 
 namespace rgbdo {
 namespace {

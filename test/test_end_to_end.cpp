@@ -2,10 +2,12 @@
 // motion-capture ground truth.
 #include <gtest/gtest.h>
 
-#include "rgbd_odometry/evaluate.hpp"
-#include "rgbd_odometry/integrate.hpp"
-#include "rgbd_odometry/odometry.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/io/evaluate.hpp"
+#include "rgbd_odometry/pipeline/integrate.hpp"
+#include "rgbd_odometry/pipeline/odometry.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/core/time_format.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 namespace rgbdo {
 namespace {

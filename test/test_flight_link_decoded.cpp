@@ -18,7 +18,7 @@
 #include <sstream>
 #include <thread>
 
-#include "rgbd_odometry/replay.hpp"
+#include "rgbd_odometry/app/run.hpp"
 
 namespace rgbdo {
 namespace {

@@ -3,17 +3,21 @@
 // and real ORB descriptors from the bundled frames.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cstdlib>
 #include <opencv2/core.hpp>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "kernels.hpp"
-#include "rgbd_odometry/config.hpp"
-#include "rgbd_odometry/match.hpp"
-#include "rgbd_odometry/odometry.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/match.hpp"
+#include "rgbd_odometry/pipeline/odometry.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 namespace rgbdo {
 namespace {
@@ -95,10 +99,10 @@ TEST(HammingKernels, BitExactOnUnalignedRowsOddStridesAndTies) {
 TEST(HammingKernels, BitExactOnRealOrbDescriptors) {
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
-  OdometryPipeline pipeline(config);
+  FrameExtractor extractor(config);
   ProcessedFrame a, b;
-  pipeline.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), a);
-  pipeline.extract(load_tum_frame(seq.frames[9], 5000, 640, 480), b);
+  extractor.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), a);
+  extractor.extract(load_tum_frame(seq.frames[9], 5000, 640, 480), b);
   const cv::Mat& qa = a.features.descriptors;
   const cv::Mat& tb = b.features.descriptors;
   ASSERT_GT(qa.rows, 500);
@@ -107,13 +111,27 @@ TEST(HammingKernels, BitExactOnRealOrbDescriptors) {
     expect_same_as_scalar(*set, qa.data, qa.rows, qa.step, tb.data, tb.rows, tb.step, 32, "ORB frames 0 and 9");
 }
 
-TEST(KernelChoice, ActiveSetIsTheBestSupportedOneOrTheForcedScalar) {
-  const char* forced = std::getenv("RGBDO_FORCE_SCALAR");
-  const bool expect_scalar = forced != nullptr && *forced != '\0' && std::string(forced) != "0";
-  EXPECT_EQ(simd::scalar_forced(), expect_scalar);
-  const std::string expected = expect_scalar ? "scalar" : runnable_sets().front()->name;
+TEST(KernelChoice, ActiveSetIsTheBestSupportedOneOrTheRequestedOne) {
+  // GIVEN what the environment asks for: RGBDO_KERNELS=SET, the older RGBDO_FORCE_SCALAR=1, or nothing
+  const char* named = std::getenv("RGBDO_KERNELS");
+  const char* scalar = std::getenv("RGBDO_FORCE_SCALAR");
+  std::string wanted;
+  if (named != nullptr && *named != '\0') wanted = named;
+  else if (scalar != nullptr && *scalar != '\0' && std::string(scalar) != "0") wanted = "scalar";
+  EXPECT_EQ(simd::requested_kernels(), wanted);
+  if (!wanted.empty()) {
+    const auto compiled = simd::compiled_kernel_sets();
+    const auto it = std::find_if(compiled.begin(), compiled.end(), [&](const auto& s) { return wanted == s.name; });
+    ASSERT_NE(it, compiled.end()) << "RGBDO_KERNELS names a set this build does not have: " << wanted;
+    if (!simd::cpu_supports(*it)) {
+      EXPECT_NE(simd::kernel_request_problem().find("this CPU cannot run that set"), std::string::npos);
+      GTEST_SKIP() << "this CPU cannot run kernel set " << wanted;
+    }
+  }
+  EXPECT_EQ(simd::kernel_request_problem(), "");
+  const std::string expected = wanted.empty() ? runnable_sets().front()->name : wanted;
   EXPECT_EQ(simd::active_kernels().name, expected);
-  // The matcher binds the active set when built and runs that kernel.
+  // WHEN the matcher is built THEN it binds the active set and runs that kernel.
   SymmetricMatcher matcher(0.8);
   std::vector<Match> out;
   matcher.match(cv::Mat(10, 32, CV_8U, cv::Scalar(1)), cv::Mat(12, 32, CV_8U, cv::Scalar(2)), out);

@@ -1,11 +1,11 @@
-// The capture-to-output latency summary (src/latency.cpp): nearest-rank quantiles to within
+// The capture-to-output latency summary (src/runtime/latency.cpp): nearest-rank quantiles to within
 // a 0.1 ms bin, late samples kept in the last bin, and capture times ahead of the host clock
 // counted apart instead of being summarised as zero latency.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "rgbd_odometry/latency.hpp"
+#include "rgbd_odometry/runtime/latency.hpp"
 
 namespace rgbdo {
 namespace {

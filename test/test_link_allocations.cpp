@@ -23,7 +23,7 @@
 
 #include <gtest/gtest.h>
 
-#include "rgbd_odometry/link.hpp"
+#include "rgbd_odometry/link/transport.hpp"
 #include "pty_test_env.hpp"
 
 namespace {

@@ -5,7 +5,7 @@
 #include <opencv2/core.hpp>
 #include <random>
 
-#include "rgbd_odometry/match.hpp"
+#include "rgbd_odometry/pipeline/match.hpp"
 
 namespace rgbdo {
 namespace {

@@ -1,6 +1,6 @@
 // The MAVLink 2 wire: golden bytes, the checksum, trimming, sequence numbers, and each field
 // at the offset the published definitions imply. Everything here is derived independently
-// of src/mavlink.cpp: a bit-serial CRC, a wire order computed from the XML field lists, and
+// of src/link/mavlink.cpp: a bit-serial CRC, a wire order computed from the XML field lists, and
 // a decoder that zero-fills trimmed payloads as a receiver does.
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "rgbd_odometry/mavlink.hpp"
+#include "rgbd_odometry/link/mavlink.hpp"
 
 namespace rgbdo::mavlink {
 namespace {

@@ -10,8 +10,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "rgbd_odometry/mavlink_odometry.hpp"
-#include "rgbd_odometry/rng.hpp"
+#include "rgbd_odometry/link/mavlink_odometry.hpp"
+#include "rgbd_odometry/core/rng.hpp"
 
 namespace rgbdo {
 namespace {

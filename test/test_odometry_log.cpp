@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "rgbd_odometry/odometry_log.hpp"
+#include "rgbd_odometry/io/odometry_log.hpp"
 
 namespace rgbdo {
 namespace {

@@ -2,10 +2,10 @@
 
 #include <random>
 
-#include "rgbd_odometry/geometry.hpp"
-#include "kernels.hpp"
-#include "rgbd_odometry/ransac.hpp"
-#include "rgbd_odometry/umeyama.hpp"
+#include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "rgbd_odometry/pipeline/ransac.hpp"
+#include "rgbd_odometry/core/umeyama.hpp"
 
 #include <Eigen/Cholesky>
 
@@ -139,8 +139,10 @@ TEST(Ransac, FewerPairsThanMinimumFails) {
 // ---------------------------------------------------------------------------------------
 // The allocation-free RANSAC against the first, straightforward version, same seeds.
 
-#include "rgbd_odometry/odometry.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/odometry.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 #include "straightforward_ransac.hpp"
 
 namespace rgbdo {
@@ -163,16 +165,16 @@ TEST(RansacAgainstFirstVersion, SameAnswersOnRealFramesForTheSameSeed) {
   // GIVEN the 3-D correspondences of the bundled frame pairs (real ORB matches)
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
-  OdometryPipeline pipeline(config);
-  const SensorNoise noise{config.covariance.depth_noise_coeff, config.covariance.pixel_sigma_px, config.camera.fx};
+  FrameExtractor extractor(config);
+  const SensorNoise noise = sensor_noise(config);
   RigidRansac fast(config.ransac, noise, config.features.max_features);
   StraightforwardRansac first(config.ransac, noise);
   SymmetricMatcher matcher(config.matching.ratio);
   ProcessedFrame prev, curr;
-  pipeline.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), prev);
+  extractor.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), prev);
   Agreement agreement;
   for (size_t i = 1; i < seq.frames.size(); ++i) {
-    pipeline.extract(load_tum_frame(seq.frames[i], 5000, 640, 480), curr);
+    extractor.extract(load_tum_frame(seq.frames[i], 5000, 640, 480), curr);
     std::vector<Match> matches;
     matcher.match(prev.features.descriptors, curr.features.descriptors, matches);
     PointPairs pairs;

@@ -9,9 +9,12 @@
 #include <map>
 #include <thread>
 
-#include "rgbd_odometry/frame_feed.hpp"
-#include "rgbd_odometry/realtime.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/sensor/frame_feed.hpp"
+#include "rgbd_odometry/runtime/realtime.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/pair_estimator.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 namespace rgbdo {
 namespace {
@@ -90,7 +93,8 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
     EXPECT_LE(std::llabs(it->first - (t_live_ns - offset) / 1000), 2);
     return it->second;
   };
-  OdometryPipeline extractor(config), estimator(config);
+  FrameExtractor extractor(config);
+  PairEstimator estimator(config);
   std::uint64_t pair_index = 0;
   int compared = 0;
   for (const PairResult* a : live.pairs()) {

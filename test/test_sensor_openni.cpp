@@ -1,4 +1,4 @@
-// The program's OpenNI2 source (src/sensor_openni.cpp) reading the virtual sensor through
+// The program's OpenNI2 source (src/sensor/sensor_openni.cpp) reading the virtual sensor through
 // the real OpenNI2 runtime: the live path gives the same odometry as the replay of the same
 // recording, a run recorded to .oni plays back through OpenNI2's file driver,
 // dropped frames are counted, an unplugged sensor is reported within the timeout.
@@ -11,9 +11,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "rgbd_odometry/odometry.hpp"
-#include "rgbd_odometry/sensor_openni.hpp"
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/odometry.hpp"
+#include "rgbd_odometry/sensor/sensor_openni.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 namespace rgbdo {
 namespace {

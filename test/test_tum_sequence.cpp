@@ -4,7 +4,8 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/core/time_format.hpp"
 
 namespace rgbdo {
 namespace {

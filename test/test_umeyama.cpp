@@ -2,8 +2,8 @@
 
 #include <random>
 
-#include "rgbd_odometry/geometry.hpp"
-#include "rgbd_odometry/umeyama.hpp"
+#include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/core/umeyama.hpp"
 
 namespace rgbdo {
 namespace {

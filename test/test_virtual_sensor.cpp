@@ -13,7 +13,7 @@
 #include <string>
 #include <thread>
 
-#include "rgbd_odometry/tum_sequence.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
 
 namespace rgbdo {
 namespace {

@@ -2,7 +2,7 @@
 // operations in the same order (no fused multiply-add), the same reduction tree.
 #include <arm_neon.h>
 
-#include "score.hpp"
+#include "rgbd_odometry/simd/score.hpp"
 
 namespace rgbdo::simd {
 

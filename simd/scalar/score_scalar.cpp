@@ -1,7 +1,7 @@
 // Reference RANSAC scoring kernel (score.hpp). Lanes of 8 partial sums, combined at the
 // end in a fixed tree, so that the AVX2 (8 lanes) and NEON (2 x 4 lanes) twins add in the
 // same order and produce the same bits.
-#include "score.hpp"
+#include "rgbd_odometry/simd/score.hpp"
 
 namespace rgbdo::simd {
 

@@ -2,7 +2,7 @@
 // operations in the same order (no FMA), the same reduction tree; the tail (n % 8) masked.
 #include <immintrin.h>
 
-#include "score.hpp"
+#include "rgbd_odometry/simd/score.hpp"
 
 namespace rgbdo::simd {
 

@@ -1,0 +1,30 @@
+#pragma once
+// The executable's job, as a library call: read frames from a source, run the pipeline,
+// write every output, report. main() only parses the command line into RunOptions.
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace rgbdo {
+
+struct RunOptions {
+  std::string source;       // "tum:DIR" or "openni://[DEVICE-URI]" (empty: the first device)
+  std::string config_path;  // empty: built-in defaults
+  std::vector<std::string> overrides;  // "section.key=value", applied after the file
+  std::string log_path;         // odometry CSV, empty: none
+  std::string trajectory_path;  // TUM trajectory, empty: none
+  std::string link;             // MAVLink link URI (overrides link.uri), empty: the config's
+  bool quiet = false;           // no per-pair lines
+  bool verbose = false;         // per-pair stage times and counts
+  bool start_at_groundtruth = false;  // trajectory origin: ground-truth pose of the first frame
+  int max_frames = 0;           // 0: all
+};
+
+// Returns the process exit code: 0 ok, 1 input/output failure, 2 bad configuration.
+// A live source runs until it stops delivering or request_stop() is called.
+int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// Asks a running run_odometry to finish the current frame, flush and return (signal-safe).
+void request_stop();
+
+}  // namespace rgbdo

@@ -1,0 +1,159 @@
+#pragma once
+// The one typed configuration, grouped by pipeline stage. Loaded and validated once at
+// start-up (a YAML file through io/config_file.hpp, then command-line overrides); the hot
+// path only ever reads these fields.
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace rgbdo {
+
+struct CameraConfig {
+  int width = 640;
+  int height = 480;
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  // OpenCV order: k1, k2, p1, p2, k3.
+  std::array<double, 5> distortion{0, 0, 0, 0, 0};
+};
+
+struct DepthConfig {
+  double units_per_m = 5000.0;  // raw uint16 value per metre (TUM: 5000, OpenNI mm: 1000)
+  double min_m = 0.4;           // PrimeSense sensors give no reliable depth below ~0.4 m
+  double max_m = 4.5;           // beyond ~4.5 m sigma_Z exceeds 3 cm: useless for odometry
+  // A keypoint whose 5x5 depth neighbourhood spans more than this fraction of its depth sits
+  // on an occlusion edge, where colour and depth disagree; it is not back-projected.
+  double edge_max_relative_step = 0.03;
+  // Correct each keypoint's depth from the depth frame's capture time to the colour frame's
+  // (the streams of PrimeSense sensors are not synchronised; TUM fr1 is up to 17 ms apart).
+  bool compensate_timing = true;
+};
+
+// The OpenCV Feature2D algorithms features.detector and features.descriptor may name.
+inline constexpr std::array<std::string_view, 8> kFeatureDetectors{"ORB",  "AKAZE", "BRISK", "SIFT",
+                                                                   "KAZE", "FAST",  "GFTT",  "AGAST"};
+inline constexpr std::array<std::string_view, 5> kFeatureDescriptors{"ORB", "AKAZE", "BRISK", "SIFT", "KAZE"};
+
+struct FeatureConfig {
+  std::string detector = "ORB";
+  std::string descriptor = "ORB";
+  int max_features = 1000;
+  int border_px = 16;  // the image periphery dropped before detection (distortion is worst there)
+  // ORB's scale pyramid (OpenCV's defaults: 8 levels, factor 1.2) and FAST threshold.
+  int orb_levels = 8;
+  double orb_scale_factor = 1.2;
+  int fast_threshold = 20;
+};
+
+struct MatchConfig {
+  double ratio = 0.8;  // lambda_ratio: best / second-best distance must be below this
+};
+
+struct RansacConfig {
+  double inlier_threshold_m = 0.05;  // lambda_inlier
+  int max_iterations = 200;
+  bool refine_threshold = true;  // threshold <- min(3 sigma_inliers, lambda_inlier)
+  int min_inliers = 12;          // fewer than this and the pair is reported as failed
+  // Stop sampling once an all-inlier sample has been drawn with 99.9 % probability.
+  bool adaptive_stop = true;
+};
+
+struct CovarianceConfig {
+  int perturbations = 100;
+  double depth_noise_coeff = 1.425e-3;  // sigma_Z = coeff * Z^2 (Willis & Brink eq. 2), 1/m
+  // Keypoint localisation error, used with the depth noise to weight the final fit.
+  double pixel_sigma_px = 0.25;
+  // Multiply by the fit's a-posteriori variance factor (covariance.hpp); false: the paper.
+  bool residual_variance_factor = true;
+  // Multiplies the sample covariance before it is reported; see README "Covariance scale".
+  double scale = 12.0;
+};
+
+// A live OpenNI2 sensor (ignored for recorded sources).
+struct SensorConfig {
+  int fps = 30;
+  bool registration = true;     // hardware depth-to-colour registration (the paper's set-up)
+  int frame_timeout_ms = 2000;  // no frame for this long: the sensor is reported lost
+  int pairing_wait_ms = 70;     // how long a colour frame waits for its depth frame
+  // After a loss, try to re-open every reconnect_interval_ms for reconnect_timeout_s seconds
+  // (negative: for ever, as on the vehicle; 0: stop at the first loss).
+  double reconnect_timeout_s = -1;
+  int reconnect_interval_ms = 500;
+  std::string record_oni;  // non-empty: also record the sensor's streams to this .oni file
+};
+
+// The real-time pipeline's threads.
+struct RuntimeConfig {
+  // 1: extraction and pair estimation in one thread; 2: extraction of frame k+1 overlaps
+  // the matching/RANSAC/covariance of frame k.
+  int processing_threads = 2;
+  // CPUs to pin the threads to, "" for none. A comma list taken in the order capture,
+  // extraction, estimation, output (wrapping round), e.g. "4,5,6,7" for the XU3's A15 cores.
+  std::string cpu_affinity;
+};
+
+// Where the camera sits on the vehicle. The body frame is FRD (x forward, y right, z down);
+// with all zeros the camera looks forward along body x, its image x along body y (right) and
+// its image y along body z (down). The angles rotate the camera from that mount (Z-Y-X:
+// yaw about body z, then pitch, then roll), e.g. pitch -90 for a camera looking down.
+struct BodyConfig {
+  double camera_roll_deg = 0, camera_pitch_deg = 0, camera_yaw_deg = 0;
+  double camera_x_m = 0, camera_y_m = 0, camera_z_m = 0;  // camera position in the body frame
+};
+
+// The MAVLink 2 link to the flight computer (README "Flight-computer link").
+struct LinkConfig {
+  std::string uri;  // udp://HOST:PORT or serial:///dev/ttyX[:BAUD]; empty: no link
+  int system_id = 1;  // the vehicle's: a companion computer shares its autopilot's system id
+  bool odometry = true;                 // send ODOMETRY (#331): PX4 EKF2, ArduPilot EKF3
+  bool vision_position_delta = false;   // send VISION_POSITION_DELTA (#11011): ArduPilot
+  double quality_sigma_fail_m = 0.02;   // frame-to-frame sigma_t at which quality reaches 1 %
+  // ArduPilot's EK3_VIS_VERR_MIN / _MAX: confidence maps onto that velocity-noise range.
+  double velocity_error_min_mps = 0.1;
+  double velocity_error_max_mps = 0.9;
+};
+
+struct Config {
+  CameraConfig camera;
+  DepthConfig depth;
+  FeatureConfig features;
+  MatchConfig matching;
+  RansacConfig ransac;
+  CovarianceConfig covariance;
+  SensorConfig sensor;
+  RuntimeConfig runtime;
+  BodyConfig body;
+  LinkConfig link;
+  std::uint64_t seed = 1;  // with the frame-pair index, seeds RANSAC and the perturbations
+};
+
+// A bad configuration value or file; the message names the key or file.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// One value as a configuration file holds it: a number or a text.
+using ConfigValue = std::variant<double, std::string>;
+
+// Sets "section.key" from a file's value after checking its type and range (ConfigError
+// naming the key); false when there is no such key.
+bool set_config_value(Config& config, const std::string& key, const ConfigValue& value);
+
+// Applies "section.key=value" overrides (the command line's), in order.
+void apply_overrides(Config& config, const std::vector<std::string>& assignments);
+
+// Every key a configuration file or override may set, for help texts and docs.
+std::vector<std::string> config_keys();
+
+// Throws ConfigError naming the first invalid key. The syntax of link.uri is the link's
+// business (link/transport.hpp parse_link_uri), checked by the program at start-up.
+void validate(const Config& config);
+
+// runtime.cpu_affinity as CPU numbers; throws ConfigError on a malformed list.
+std::vector<int> parse_cpu_list(const std::string& text);
+
+}  // namespace rgbdo

@@ -1,0 +1,36 @@
+#pragma once
+// What the pipeline says about one pair of consecutive frames: the contract between the
+// estimator (pipeline/) and everything downstream of it (io/ logs and evaluation, link/
+// messages, runtime/ and app/), which is why it lives in core/ and needs only Eigen.
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <limits>
+
+#include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/core/status.hpp"
+
+namespace rgbdo {
+
+struct StageTimes {  // wall time of each stage for this pair, milliseconds
+  double detect_ms = 0;       // mask + detection + description + keypoint geometry, current frame
+  double match_ms = 0;
+  double backproject_ms = 0;  // building the 3-D pairs (incl. the timing-compensation pass)
+  double ransac_ms = 0;
+  double covariance_ms = 0;
+};
+
+struct PairResult {
+  std::int64_t t_prev_ns = 0;  // colour capture times of the two frames
+  std::int64_t t_curr_ns = 0;
+  Status status = Status::Ok;
+  int features_prev = 0, features_curr = 0;
+  int matches = 0;      // symmetric ratio-test matches
+  int point_pairs = 0;  // matches with usable depth in both frames
+  int inliers = 0;
+  double inlier_threshold_m = 0;
+  Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
+  Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
+  StageTimes times;
+};
+
+}  // namespace rgbdo

@@ -1,0 +1,15 @@
+#pragma once
+// The configuration as a file: YAML in OpenCV FileStorage syntax (deploy/config/*.yaml).
+#include <string>
+
+#include "rgbd_odometry/core/config.hpp"
+
+namespace rgbdo {
+
+// Reads a YAML file. Keys absent from the file keep their defaults; an unknown key is an
+// error (a typo must not silently fly with a default). `camera.calibration_file` may name an
+// OpenCV calibration file whose `camera_matrix` and `distortion_coefficients` provide the
+// intrinsics. Throws ConfigError naming the file or key.
+Config load_config(const std::string& path);
+
+}  // namespace rgbdo

@@ -1,0 +1,70 @@
+#pragma once
+// Stage 3: matched keypoints to 3-D points, X = x_n Z, Y = y_n Z (Willis & Brink eq. 1), with
+// x_n, y_n the undistorted normalised coordinates from the calibrated intrinsics.
+//
+// Colour and depth of a PrimeSense sensor are captured at different instants (TUM fr1:
+// up to 17 ms apart, the sign flipping from frame to frame, two colour frames sometimes
+// sharing one depth image). Reading depth at a colour pixel then mixes two camera poses.
+// With compensation on, each depth is carried to its colour frame's instant to first order:
+//     Z(t_c) = Z(t_d) + (t_c - t_d) * (dZ/dt - grad Z . du/dt)
+// where dZ/dt = -(v + w x P)_z is the depth rate of a static point seen by a camera moving
+// with the motion prior (v, w), and du/dt is the match's own pixel velocity (the second term
+// accounts for the surface sliding under the pixel on slanted surfaces).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
+#include <vector>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/match.hpp"
+
+namespace rgbdo {
+
+// Per-keypoint geometry of one frame, computed once per frame (each frame serves two pairs).
+struct KeypointGeometry {
+  std::vector<Eigen::Vector2d> normalized;      // undistorted (X/Z, Y/Z)
+  std::vector<Eigen::Vector2d> pixel;           // distorted pixel position (the keypoint)
+  std::vector<double> depth_m;                  // 0: unusable (no reading, out of range, occlusion edge)
+  std::vector<Eigen::Vector2d> depth_gradient;  // dZ/du, dZ/dv in metres per pixel
+  void clear();
+};
+
+class KeypointBackProjector {
+ public:
+  KeypointBackProjector(const CameraConfig& camera, const DepthConfig& depth);
+  void compute(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& depth_m, KeypointGeometry& out);
+
+ private:
+  cv::Mat camera_matrix_, distortion_;
+  DepthConfig depth_;
+  std::vector<cv::Point2f> distorted_, undistorted_;
+};
+
+// Camera velocity in the camera frame, used to move depths between capture instants.
+struct MotionPrior {
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
+};
+
+struct FrameTimes {
+  std::int64_t t_colour_ns = 0;
+  std::int64_t t_depth_ns = 0;
+};
+
+// 3-D correspondences of a frame pair; index k of prev/curr belong together.
+struct PointPairs {
+  std::vector<Eigen::Vector3d> prev, curr;
+  std::vector<int> match_index;  // into the matches the pairs were built from
+  void clear();
+  size_t size() const { return prev.size(); }
+};
+
+// Builds the pairs of all matches whose keypoints have usable depth in both frames.
+// prior == nullptr: depth taken as measured (no timing compensation).
+void build_point_pairs(const std::vector<Match>& matches, const KeypointGeometry& prev, const FrameTimes& prev_times,
+                       const KeypointGeometry& curr, const FrameTimes& curr_times, const MotionPrior* prior,
+                       PointPairs& out);
+
+}  // namespace rgbdo

@@ -1,0 +1,32 @@
+#pragma once
+// The fixed pipeline on one thread: feed RGB-D frames in capture order, get one result per
+// consecutive pair. Stages: mask -> detect -> back-project (FrameExtractor, per frame), then
+// match -> point pairs -> RANSAC -> covariance (PairEstimator, per pair). The real-time
+// runtime (runtime/realtime.hpp) runs the two halves on their own threads instead.
+#include <cstdint>
+#include <optional>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/pair_result.hpp"
+#include "rgbd_odometry/pipeline/frame.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/pipeline/pair_estimator.hpp"
+
+namespace rgbdo {
+
+class OdometryPipeline {
+ public:
+  explicit OdometryPipeline(const Config& config);  // config must have passed validate()
+
+  // The first frame returns nothing; each later one returns the (previous, this) pair.
+  [[nodiscard]] std::optional<PairResult> process(const RgbdFrame& frame);
+
+ private:
+  FrameExtractor extractor_;
+  PairEstimator estimator_;
+  ProcessedFrame prev_, curr_;
+  bool have_prev_ = false;
+  std::uint64_t pair_index_ = 0;
+};
+
+}  // namespace rgbdo

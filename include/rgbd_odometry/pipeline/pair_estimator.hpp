@@ -1,0 +1,44 @@
+#pragma once
+// The per-pair half of the pipeline: match -> 3-D point pairs -> RANSAC -> covariance, on two
+// frames already through FrameExtractor. Its state lives as long as the pair stream: scratch
+// buffers sized once (no allocation per pair) and the last pair's velocity, the motion prior
+// for the colour/depth timing compensation of the next.
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/pair_result.hpp"
+#include "rgbd_odometry/pipeline/backproject.hpp"
+#include "rgbd_odometry/pipeline/covariance.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/pipeline/match.hpp"
+#include "rgbd_odometry/pipeline/ransac.hpp"
+
+namespace rgbdo {
+
+class PairEstimator {
+ public:
+  explicit PairEstimator(const Config& config);  // config must have passed validate()
+
+  // pair_index numbers the pairs of a run (it seeds the pair's random streams, so a replay
+  // reproduces every pair exactly).
+  [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index);
+
+  // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
+  void forget_motion() { last_motion_.reset(); }
+
+ private:
+  Config config_;
+  SymmetricMatcher matcher_;
+  RigidRansac ransac_;
+  PerturbationCovariance covariance_;
+  std::vector<Match> matches_;
+  PointPairs pairs_;
+  RansacResult fit_, refined_;
+  std::vector<Eigen::Vector3d> inlier_prev_, inlier_curr_;
+  // Velocity of the last good pair: the motion prior for timing compensation.
+  std::optional<MotionPrior> last_motion_;
+};
+
+}  // namespace rgbdo

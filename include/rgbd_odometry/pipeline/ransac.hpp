@@ -1,0 +1,68 @@
+#pragma once
+// Stage 4: robust rigid motion from 3-D correspondences (Willis & Brink Sec. III-A, stage 2).
+// Hypotheses from random 3-point samples are scored by their inlier count at lambda_inlier;
+// the best is then refined as PCL's refineModel does: fit all inliers by least squares,
+// shrink the threshold to min(3 sigma_inliers, lambda_inlier), re-select, until stable.
+// The final fit minimises the Mahalanobis residual under the ray-aligned sensor noise
+// (noise_model.hpp): depth errors along the viewing ray are cheap, lateral ones are not.
+//
+// Allocation-free: every buffer is sized at construction for `capacity` correspondences
+// (more only on the first larger input), the caller's RansacResult keeps its inlier buffer
+// across frames. A sample's motion comes from the closed-form triplet fit (fit_triplet: no
+// SVD); hypotheses are scored by the active SIMD kernel (rgbd_odometry/simd/score.hpp) over
+// structure-of-arrays float coordinates. The refinement and final fits run in double.
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/core/rng.hpp"
+#include "rgbd_odometry/core/status.hpp"
+
+namespace rgbdo {
+
+struct RansacResult {
+  Status status = Status::RansacFailed;
+  Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // maps curr points into prev
+  std::vector<int> inliers;  // indices into the point pairs; capacity reused across calls
+  double threshold_m = 0;    // the final (refined) inlier threshold
+  int hypotheses = 0;        // non-degenerate samples scored
+};
+
+class RigidRansac {
+ public:
+  RigidRansac(const RansacConfig& ransac, const SensorNoise& noise, int capacity);
+
+  // prev[k] ~ T * curr[k] for inliers k. `out` is overwritten.
+  void estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, Rng& rng,
+                RansacResult& out);
+
+  // The hypothesis stage alone: best motion of up to max_iterations non-degenerate samples;
+  // returns how many were scored (0: every draw was degenerate).
+  int sample_hypotheses(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, Rng& rng,
+                        Eigen::Isometry3d& best);
+
+  // The refinement alone, from a given motion (used again after the points were corrected).
+  void refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+              const Eigen::Isometry3d& initial, RansacResult& out);
+
+ private:
+  void load(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr);  // into the SoA
+  bool sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                            const int* idx) const;
+  void select_inliers(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                      const Eigen::Isometry3d& T, double threshold, std::vector<int>& out) const;
+  // Gauss-Newton on sum_k r_k^T (C_prev + R C_curr R^T)^-1 r_k over the inliers, from T.
+  Eigen::Isometry3d fit_anisotropic(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                    const std::vector<int>& inliers, Eigen::Isometry3d T) const;
+  RansacConfig config_;
+  SensorNoise noise_;
+  simd::ScoreRigidFn score_;
+  std::vector<float> px_, py_, pz_, cx_, cy_, cz_;  // prev and curr, structure of arrays
+  std::vector<int> scratch_inliers_;
+  std::vector<Eigen::Vector3d> fit_prev_, fit_curr_;
+  std::vector<double> fit_weights_;
+};
+
+}  // namespace rgbdo

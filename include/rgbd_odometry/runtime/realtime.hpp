@@ -1,0 +1,68 @@
+#pragma once
+// The real-time pipeline: capture, processing and output each on their own threads, joined
+// by bounded queues allocated once.
+//
+//   capture --FrameMailbox--> extraction --(4 frame slots)--> estimation --(64 results)--> output
+//
+// Capture never waits on processing (a live frame not taken in time is replaced by the newer
+// one, and counted); with runtime.processing_threads = 2 the feature extraction of frame k+1
+// runs while frame k is matched, fitted and its covariance sampled. Output (logs, link,
+// console) runs in order on its own thread, so a slow disk or terminal never stalls capture;
+// if it falls 64 results behind, estimation waits, and the newest-frame rule absorbs it.
+// A lost sensor is re-opened by the capture thread; the pair spanning the gap is reported
+// with status sensor_lost.
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/sensor/frame_feed.hpp"
+#include "rgbd_odometry/runtime/latency.hpp"
+#include "rgbd_odometry/core/pair_result.hpp"
+
+namespace rgbdo {
+
+struct PairOutput {
+  bool has_pair = false;                  // false for the very first frame
+  PairResult result;                      // when has_pair
+  std::int64_t t_frame_ns = 0;            // colour capture time of the newer frame
+  std::int64_t t_capture_host_ns = 0;     // steady clock, see CapturedFrame
+  int skipped = 0;                        // frames skipped between the pair's two frames
+  double latency_ms = 0;                  // capture to hand-over to the outputs
+  std::string frame_problem;              // the newer frame's failure, as the source put it
+};
+
+struct RealtimeStats {
+  std::uint64_t frames = 0;    // processed
+  std::uint64_t skipped = 0;   // replaced before processing could take them
+  std::uint64_t pairs = 0;
+  int sensor_losses = 0, reopens = 0;
+  int dropped_by_sensor = 0;   // from the sensor's frame indices
+  LatencyHistogram latency;    // of pairs
+};
+
+class RealtimePipeline {
+ public:
+  using OutputFn = std::function<void(const PairOutput&)>;
+  using MessageFn = std::function<void(const std::string&)>;
+  // on_output gets every frame's result, in capture order; on_message the run's news (sensor
+  // lost / back, periodic status). Both are called on the output thread only.
+  RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message);
+  // Called on the output thread at least every 50 ms, frames or not (heartbeats, link news).
+  void set_tick(std::function<void()> on_tick) { on_tick_ = std::move(on_tick); }
+
+  // Runs until the feed ends, the sensor stays lost past sensor.reconnect_timeout_s, or
+  // `stop` becomes true (then: within a second, every frame in hand is finished and output).
+  // Throws ConfigError when runtime.cpu_affinity names a CPU this process may not use.
+  RealtimeStats run(const std::atomic<bool>& stop);
+
+ private:
+  Config config_;
+  FrameFeed& feed_;
+  OutputFn on_output_;
+  MessageFn on_message_;
+  std::function<void()> on_tick_;
+};
+
+}  // namespace rgbdo

@@ -1,0 +1,53 @@
+#pragma once
+// The table of hot-path kernels, chosen once when the pipeline is built (never per call).
+// Each instruction set this build was compiled with contributes one KernelSet; the best one
+// the running CPU supports is active unless RGBDO_KERNELS names another (libjpeg-turbo's
+// JSIMD_FORCE*, simdjson's SIMDJSON_FORCE_IMPLEMENTATION):
+//   RGBDO_KERNELS=scalar|sse42|avx2|neon   that set, which must be compiled in and supported
+//   RGBDO_FORCE_SCALAR=1                   the older spelling of RGBDO_KERNELS=scalar
+#include <span>
+#include <string>
+
+#include "rgbd_odometry/simd/nearest_two.hpp"
+#include "rgbd_odometry/simd/perturb.hpp"
+#include "rgbd_odometry/simd/score.hpp"
+
+namespace rgbdo::simd {
+
+using NearestTwoHammingFn = void (*)(const std::uint8_t* query, int n_query, std::size_t query_stride,
+                                     const std::uint8_t* train, int n_train, std::size_t train_stride, int bytes,
+                                     NearestTwo* query_out, NearestTwo* train_out);
+
+using PerturbationSumsFn = void (*)(const PerturbationInput& in, const PerturbationSums& out);
+
+using ScoreRigidFn = void (*)(const RigidScoreInput& in, int& count, float& cost);
+
+struct KernelSet {
+  const char* name;  // "scalar", "neon", "avx2", ...
+  NearestTwoHammingFn nearest_two_hamming;
+  PerturbationSumsFn perturbation_sums;
+  ScoreRigidFn score_rigid;
+};
+
+// Every kernel set compiled into this build, the scalar reference last.
+std::span<const KernelSet> compiled_kernel_sets();
+
+// Whether the running CPU can execute a compiled set.
+bool cpu_supports(const KernelSet& set);
+
+// What the environment asks for: the set's name, or empty for "the best supported one".
+// RGBDO_KERNELS wins over RGBDO_FORCE_SCALAR.
+std::string requested_kernels();
+
+// Empty when the request can be honoured; otherwise why not, naming the variable, the set
+// and the sets that can run here. main() refuses to start on it; active_kernels() then
+// falls back to the best supported set, so a library user is never left without kernels.
+std::string kernel_request_problem();
+
+// The set in use: decided at the first call and fixed for the life of the process.
+const KernelSet& active_kernels();
+
+// The architecture this binary was compiled for ("x86_64", "armv7-a+neon", ...).
+const char* build_architecture();
+
+}  // namespace rgbdo::simd

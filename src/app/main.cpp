@@ -1,0 +1,77 @@
+// rgbd-odometry: RGB-D visual odometry with covariance (Willis & Brink, PLANS 2016).
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <iostream>
+#include <string>
+
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "rgbd_odometry/app/list_devices.hpp"
+#include "rgbd_odometry/app/run.hpp"
+#include "rgbd_odometry/core/version.hpp"
+
+int main(int argc, char** argv) {
+  rgbdo::RunOptions options;
+  CLI::App app{"rgbd-odometry: frame-to-frame RGB-D odometry with a 6x6 covariance per pair"};
+  app.set_version_flag("--version", std::string("rgbd-odometry ") + rgbdo::kVersion);
+  app.add_flag_callback(
+      "--print-kernels",
+      [] {
+        std::cout << "build: " << rgbdo::simd::build_architecture() << "\ncompiled kernel sets:";
+        for (const auto& s : rgbdo::simd::compiled_kernel_sets())
+          std::cout << " " << s.name << (rgbdo::simd::cpu_supports(s) ? "" : " (unsupported by this CPU)");
+        const std::string requested = rgbdo::simd::requested_kernels();
+        std::cout << "\nactive: " << rgbdo::simd::active_kernels().name
+                  << (requested.empty() ? "" : " (requested by the environment: " + requested + ")") << "\n";
+        if (const std::string problem = rgbdo::simd::kernel_request_problem(); !problem.empty()) {
+          std::cerr << "rgbd-odometry: " << problem << "\n";
+          throw CLI::RuntimeError(2);
+        }
+        throw CLI::Success();
+      },
+      "list the SIMD kernel sets in this build and the one in use, then exit");
+  app.add_flag_callback(
+      "--list-devices", [] { throw CLI::RuntimeError(rgbdo::list_devices(std::cout)); },
+      "list the OpenNI2 devices present, then exit");
+  app.add_option("--source", options.source,
+                 "frame source: tum:DIR (a TUM RGB-D sequence), openni://[DEVICE-URI] (a live sensor, the first "
+                 "found when empty) or oni:FILE.oni (an OpenNI2 recording)")
+      ->required();
+  app.add_option("--config", options.config_path, "YAML configuration (e.g. deploy/config/tum-fr1.yaml)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--set", options.overrides, "override a configuration key: --set ransac.max_iterations=300")
+      ->type_name("KEY=VALUE");
+  std::string detector, seed, max_features, scale;
+  app.add_option("--detector", detector, "shorthand for --set features.detector=NAME --set features.descriptor=NAME");
+  app.add_option("--max-features", max_features, "shorthand for --set features.max_features=N");
+  app.add_option("--covariance-scale", scale, "shorthand for --set covariance.scale=S");
+  app.add_option("--seed", seed, "shorthand for --set seed=N");
+  app.add_option("--log", options.log_path, "write the odometry CSV log here");
+  app.add_option("--link", options.link,
+                 "send MAVLink 2 odometry to the flight computer: udp://HOST:PORT or serial:///dev/ttyX[:BAUD] "
+                 "(overrides link.uri)");
+  app.add_option("--trajectory", options.trajectory_path, "write the integrated trajectory (TUM format) here");
+  app.add_option("--max-frames", options.max_frames, "stop after this many frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_flag("--start-at-groundtruth", options.start_at_groundtruth,
+               "start the trajectory at the first frame's ground-truth pose");
+  app.add_flag("-q,--quiet", options.quiet, "no per-pair lines, only the summary");
+  app.add_flag("-v,--verbose", options.verbose, "per-pair stage times and counts");
+  CLI11_PARSE(app, argc, argv);
+  // A kernel set forced by the environment that cannot run here is a usage error, not a
+  // silent fallback: the user asked to measure or test that set.
+  if (const std::string problem = rgbdo::simd::kernel_request_problem(); !problem.empty()) {
+    std::cerr << "rgbd-odometry: " << problem << "\n";
+    return 2;
+  }
+
+  if (!detector.empty()) {
+    options.overrides.push_back("features.detector=" + detector);
+    options.overrides.push_back("features.descriptor=" + detector);
+  }
+  if (!max_features.empty()) options.overrides.push_back("features.max_features=" + max_features);
+  if (!scale.empty()) options.overrides.push_back("covariance.scale=" + scale);
+  if (!seed.empty()) options.overrides.push_back("seed=" + seed);
+  // SIGINT / SIGTERM: finish the frame in hand, flush every output, print the summary.
+  std::signal(SIGINT, [](int) { rgbdo::request_stop(); });
+  std::signal(SIGTERM, [](int) { rgbdo::request_stop(); });
+  return rgbdo::run_odometry(options, std::cout, std::cerr);
+}

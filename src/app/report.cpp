@@ -1,0 +1,92 @@
+#include "rgbd_odometry/app/report.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/core/time_format.hpp"
+
+namespace rgbdo {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+void print_stats(std::ostream& out, const char* name, const ErrorStats& s, double factor, const char* unit) {
+  out << "  " << std::left << std::setw(38) << name << std::right << std::fixed << std::setprecision(3) << "RMSE "
+      << s.rmse * factor << "  median " << s.median * factor << "  max " << s.max * factor << " " << unit << "  ("
+      << s.count << ")\n";
+}
+
+}  // namespace
+
+std::string pair_line(const PairResult& r, std::size_t index, bool verbose) {
+  std::ostringstream s;
+  s << std::fixed << "pair " << std::setw(4) << index << "  " << format_seconds(r.t_curr_ns) << "  "
+    << std::left << std::setw(16) << status_word(r.status) << std::right;
+  if (r.status == Status::Ok) {
+    const Vector6d xi = xi_from_transform(r.T_prev_curr);
+    const Vector6d sd = r.covariance.diagonal().cwiseSqrt();
+    s << "inliers " << std::setw(4) << r.inliers << "/" << std::setw(4) << r.point_pairs << std::setprecision(2)
+      << "  t[mm] " << std::showpos << std::setw(7) << xi(0) * 1e3 << std::setw(7) << xi(1) * 1e3 << std::setw(7)
+      << xi(2) * 1e3 << "  r[deg] " << std::setw(6) << xi(3) * kRadToDeg << std::setw(6) << xi(4) * kRadToDeg
+      << std::setw(6) << xi(5) * kRadToDeg << std::noshowpos << "  sd_t[mm] " << sd(0) * 1e3 << " " << sd(1) * 1e3
+      << " " << sd(2) * 1e3 << "  sd_r[deg] " << std::setprecision(3) << sd(3) * kRadToDeg << " "
+      << sd(4) * kRadToDeg << " " << sd(5) * kRadToDeg;
+  } else {
+    s << "features " << r.features_prev << "/" << r.features_curr << "  matches " << r.matches << "  with depth "
+      << r.point_pairs;
+  }
+  if (verbose) {
+    s << std::setprecision(2) << "  | features " << r.features_curr << " matches " << r.matches << " thr "
+      << r.inlier_threshold_m * 1e3 << "mm | ms detect " << r.times.detect_ms << " match " << r.times.match_ms
+      << " backproject " << r.times.backproject_ms << " ransac " << r.times.ransac_ms << " covariance "
+      << r.times.covariance_ms;
+  }
+  return s.str();
+}
+
+void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const StageTimes& total,
+                   int timed_pairs, const RealtimeStats& run) {
+  out << "summary: " << s.pairs << " pairs, " << s.pairs - s.failed << " ok, " << s.failed << " failed";
+  for (const auto& [word, n] : s.failures) out << " (" << word << ": " << n << ")";
+  out << "\n";
+  out << "  frames: " << run.frames << " processed, " << run.skipped << " skipped (processing behind), "
+      << run.dropped_by_sensor << " dropped by the sensor; sensor lost " << run.sensor_losses << " times, re-opened "
+      << run.reopens << " times\n";
+  if (run.latency.count() > 0)
+    out << std::fixed << std::setprecision(2) << "  latency capture to output: median " << run.latency.quantile_ms(0.5)
+        << " ms, p99 " << run.latency.quantile_ms(0.99) << " ms, max " << run.latency.max_ms() << " ms ("
+        << run.latency.count() << " pairs)\n";
+  if (run.latency.ahead_of_clock() > 0)
+    out << "  latency capture to output: not measurable for " << run.latency.ahead_of_clock()
+        << " pairs, whose capture time is ahead of the host clock (the device clock runs at another rate;"
+           " the virtual sensor at rate != 1 keeps the recording's times)\n";
+  if (timed_pairs > 0) {
+    const double n = timed_pairs;
+    const double frame_ms = (total.detect_ms + total.match_ms + total.backproject_ms + total.ransac_ms +
+                             total.covariance_ms) / n;
+    out << std::fixed << std::setprecision(2) << "  time per frame (decode excluded): " << frame_ms << " ms = "
+        << 1000.0 / frame_ms << " frames/s  [detect " << total.detect_ms / n << ", match " << total.match_ms / n
+        << ", backproject " << total.backproject_ms / n << ", ransac " << total.ransac_ms / n << ", covariance "
+        << total.covariance_ms / n << " ms]\n";
+  }
+  if (!with_groundtruth) {
+    out << "  no groundtruth.txt: accuracy not evaluated\n";
+    return;
+  }
+  out << "  accuracy against ground truth (" << s.evaluated << " pairs):\n";
+  print_stats(out, "frame-to-frame RPE, translation", s.rpe_translation_m, 1e3, "mm");
+  print_stats(out, "frame-to-frame RPE, rotation", s.rpe_rotation_deg, 1.0, "deg");
+  print_stats(out, "drift over 1 s windows, translation", s.drift_translation_mps, 1.0, "m/s");
+  print_stats(out, "drift over 1 s windows, rotation", s.drift_rotation_degps, 1.0, "deg/s");
+  out << std::setprecision(2) << "  covariance, per axis: mean e^2/var " << s.mean_axis_nees
+      << " (1 when consistent) [t " << s.axis_nees(0) << " " << s.axis_nees(1) << " " << s.axis_nees(2) << ", r "
+      << s.axis_nees(3) << " " << s.axis_nees(4) << " " << s.axis_nees(5) << "]; 1 at covariance.scale "
+      << s.consistent_scale << "\n";
+  out << "  covariance, joint 6-D: mean NEES " << s.mean_nees << " (6 when consistent), median " << s.median_nees
+      << " (5.35), " << std::setprecision(1) << 100.0 * s.nees_within_95 << "% within the 95% bound\n";
+}
+
+}  // namespace rgbdo

@@ -1,0 +1,176 @@
+#include "rgbd_odometry/app/run.hpp"
+
+#include <atomic>
+#include <iomanip>
+#include <memory>
+#include <ostream>
+
+#include "rgbd_odometry/app/report.hpp"
+#include "rgbd_odometry/core/clock.hpp"
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/time_format.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/io/evaluate.hpp"
+#include "rgbd_odometry/io/odometry_log.hpp"
+#include "rgbd_odometry/link/flight_link.hpp"
+#include "rgbd_odometry/pipeline/integrate.hpp"
+#include "rgbd_odometry/runtime/realtime.hpp"
+#include "rgbd_odometry/sensor/frame_feed.hpp"
+
+namespace rgbdo {
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+// The configuration file, then the overrides in order, then --link; checked as a whole.
+Config configure(const RunOptions& options) {
+  Config config;
+  if (!options.config_path.empty()) config = load_config(options.config_path);
+  apply_overrides(config, options.overrides);
+  if (!options.link.empty()) config.link.uri = options.link;
+  validate(config);
+  if (!config.link.uri.empty()) {
+    try {
+      (void)parse_link_uri(config.link.uri);
+    } catch (const LinkError& e) {
+      throw ConfigError(std::string("config key 'link.uri': ") + e.what());
+    }
+  }
+  return config;
+}
+
+}  // namespace
+
+int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err) {
+  Config config;
+  try {
+    config = configure(options);
+  } catch (const ConfigError& e) {
+    err << "rgbd-odometry: configuration error: " << e.what() << "\n";
+    return 2;
+  }
+
+  std::unique_ptr<FrameFeed> feed;
+  try {
+    feed = open_frame_feed(options.source, config, options.max_frames);
+  } catch (const SourceSpecError& e) {
+    err << "rgbd-odometry: " << e.what() << "\n";
+    return 2;
+  } catch (const SourceError& e) {
+    err << "rgbd-odometry: cannot open source: " << e.what() << "\n";
+    return 1;
+  }
+  if (feed->live()) err << "rgbd-odometry: reading " << feed->description() << "\n";
+  static const GroundTruth kNoGroundTruth;
+  const GroundTruth& groundtruth = feed->groundtruth() ? *feed->groundtruth() : kNoGroundTruth;
+
+  std::unique_ptr<OdometryCsvWriter> log;
+  std::unique_ptr<TrajectoryWriter> trajectory;
+  try {
+    if (!options.log_path.empty()) log = std::make_unique<OdometryCsvWriter>(options.log_path);
+    if (!options.trajectory_path.empty()) trajectory = std::make_unique<TrajectoryWriter>(options.trajectory_path);
+  } catch (const std::exception& e) {
+    err << "rgbd-odometry: " << e.what() << "\n";
+    return 1;
+  }
+
+  std::unique_ptr<FlightLink> flight;
+  if (!config.link.uri.empty()) {
+    try {
+      flight = std::make_unique<FlightLink>(config);
+      err << "rgbd-odometry: " << flight->startup_report() << "\n";
+    } catch (const LinkError& e) {
+      err << "rgbd-odometry: cannot open the flight-computer link: " << e.what() << "\n";
+      return 1;
+    }
+  }
+
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
+  const auto* tum = dynamic_cast<const TumFeed*>(feed.get());
+  if (options.start_at_groundtruth && tum && !tum->sequence().frames.empty()) {
+    const auto gt = groundtruth.at(tum->sequence().frames.front().t_colour_ns);
+    if (!gt) {
+      err << "rgbd-odometry: --start-at-groundtruth: no ground truth at the first frame\n";
+      return 1;
+    }
+    origin = *gt;
+  }
+
+  TrajectoryIntegrator integrator(origin);
+  AccuracyEvaluator evaluator(groundtruth, config.covariance.scale);
+  StageTimes total;
+  int timed_pairs = 0;
+  size_t pair_count = 0;
+  std::string output_error;
+  // Runs on the pipeline's output thread, one frame at a time, in capture order.
+  const auto on_output = [&](const PairOutput& item) {
+    if (!output_error.empty()) return;
+    try {
+      if (!item.frame_problem.empty()) err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns) << ": " << item.frame_problem << "\n";
+      if (!item.has_pair) {
+        if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
+        return;
+      }
+      const PairResult& r = item.result;
+      if (r.status == Status::Ok) {
+        integrator.add(r.T_prev_curr);
+        total.detect_ms += r.times.detect_ms;
+        total.match_ms += r.times.match_ms;
+        total.backproject_ms += r.times.backproject_ms;
+        total.ransac_ms += r.times.ransac_ms;
+        total.covariance_ms += r.times.covariance_ms;
+        ++timed_pairs;
+      }
+      if (log) log->write(r);
+      if (flight) flight->send_pair(r);
+      if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
+      evaluator.add(r, origin.inverse() * integrator.pose());
+      ++pair_count;
+      if (!options.quiet) {
+        out << pair_line(r, pair_count - 1, options.verbose);
+        if (item.skipped > 0) out << "  (" << item.skipped << " frames skipped)";
+        if (options.verbose) out << std::fixed << std::setprecision(1) << " | latency " << item.latency_ms << " ms";
+        out << "\n";
+      }
+    } catch (const std::exception& e) {
+      output_error = e.what();  // reported once the run has stopped
+      g_stop = true;
+    }
+  };
+  const auto on_message = [&](const std::string& text) { err << "rgbd-odometry: " << text << "\n" << std::flush; };
+
+  g_stop = false;
+  RealtimeStats run;
+  try {
+    RealtimePipeline pipeline(config, *feed, on_output, on_message);
+    if (flight) {
+      pipeline.set_tick([&] {
+        flight->tick(steady_now_ns());
+        if (const std::string news = flight->news(); !news.empty()) on_message("link: " + news);
+      });
+    }
+    run = pipeline.run(g_stop);
+  } catch (const ConfigError& e) {
+    err << "rgbd-odometry: configuration error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    err << "rgbd-odometry: " << e.what() << "\n";
+    return 1;
+  }
+  if (!output_error.empty()) {
+    err << "rgbd-odometry: " << output_error << "\n";
+    return 1;
+  }
+  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, run);
+  if (flight) {
+    const LinkStats st = flight->stats();
+    out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down
+        << " dropped (" << st.frames_dropped_link_down << " while the link was down), " << st.reconnects
+        << " reconnects\n";
+  }
+  return 0;
+}
+
+void request_stop() { g_stop = true; }
+
+}  // namespace rgbdo

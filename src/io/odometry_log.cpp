@@ -1,0 +1,76 @@
+#include "rgbd_odometry/io/odometry_log.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+#include "rgbd_odometry/core/time_format.hpp"
+
+namespace rgbdo {
+namespace {
+
+std::ofstream open_or_throw(const std::string& path) {
+  std::ofstream out(path, std::ios::out | std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot create output file '" + path + "'");
+  return out;
+}
+
+void check(const std::ofstream& out, const std::string& path) {
+  if (!out) throw std::runtime_error("cannot write to '" + path + "' (disk full or file removed?)");
+}
+
+}  // namespace
+
+OdometryCsvWriter::OdometryCsvWriter(const std::string& path) : path_(path), out_(open_or_throw(path)) {
+  out_ << header() << '\n' << std::flush;
+  check(out_, path_);
+}
+
+std::string OdometryCsvWriter::header() {
+  std::string h = "t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw";
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) h += ",c" + std::to_string(i) + std::to_string(j);
+  return h;
+}
+
+std::string OdometryCsvWriter::row(const PairResult& r) {
+  const bool ok = r.status == Status::Ok;
+  const Eigen::Isometry3d T = ok ? r.T_prev_curr : Eigen::Isometry3d::Identity();
+  Eigen::Quaterniond q(T.linear());
+  q.normalize();
+  if (q.w() < 0) q.coeffs() *= -1;  // one sign convention for the same rotation
+  std::string s = format_seconds(r.t_prev_ns) + "," + format_seconds(r.t_curr_ns) + "," +
+                  std::string(status_word(r.status)) + "," + std::to_string(ok ? r.inliers : 0);
+  char buf[64];
+  // %.9g keeps sub-micrometre resolution on translations and ~1e-9 on quaternions.
+  for (double v : {T.translation().x(), T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w()}) {
+    std::snprintf(buf, sizeof buf, ",%.9g", v);
+    s += buf;
+  }
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      if (ok) std::snprintf(buf, sizeof buf, ",%.6e", r.covariance(i, j));
+      else std::snprintf(buf, sizeof buf, ",nan");
+      s += buf;
+    }
+  return s;
+}
+
+void OdometryCsvWriter::write(const PairResult& r) {
+  out_ << row(r) << '\n' << std::flush;
+  check(out_, path_);
+}
+
+TrajectoryWriter::TrajectoryWriter(const std::string& path) : path_(path), out_(open_or_throw(path)) {
+  out_ << "# timestamp tx ty tz qx qy qz qw (rgbd-odometry integrated trajectory)\n";
+}
+
+void TrajectoryWriter::write(std::int64_t t_ns, const Eigen::Isometry3d& pose) {
+  Eigen::Quaterniond q(pose.linear());
+  q.normalize();
+  char buf[160];
+  std::snprintf(buf, sizeof buf, " %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", pose.translation().x(),
+                pose.translation().y(), pose.translation().z(), q.x(), q.y(), q.z(), q.w());
+  out_ << format_seconds(t_ns) << buf << std::flush;
+  check(out_, path_);
+}
+
+}  // namespace rgbdo

@@ -1,0 +1,119 @@
+#include "rgbd_odometry/link/mavlink.hpp"
+
+#include <bit>
+
+namespace rgbdo::mavlink {
+namespace {
+
+// Bytes are built by shifting, never by copying a struct: the wire is little-endian whatever
+// the host is, and MAVLink's field order is not C's layout.
+void put_u8(std::span<std::uint8_t> out, std::size_t offset, std::uint8_t v) { out[offset] = v; }
+
+void put_u32(std::span<std::uint8_t> out, std::size_t offset, std::uint32_t v) {
+  for (std::size_t i = 0; i < 4; ++i) out[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+void put_u64(std::span<std::uint8_t> out, std::size_t offset, std::uint64_t v) {
+  for (std::size_t i = 0; i < 8; ++i) out[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+void put_f32(std::span<std::uint8_t> out, std::size_t offset, float v) {
+  static_assert(std::numeric_limits<float>::is_iec559, "MAVLink floats are IEEE 754 binary32");
+  put_u32(out, offset, std::bit_cast<std::uint32_t>(v));
+}
+
+template <std::size_t N>
+void put_f32_array(std::span<std::uint8_t> out, std::size_t offset, const std::array<float, N>& v) {
+  for (std::size_t i = 0; i < N; ++i) put_f32(out, offset + 4 * i, v[i]);
+}
+
+// The payload area of a frame buffer, sized for one message.
+template <typename Message>
+std::span<std::uint8_t, Message::kPayloadBytes> payload_area(FrameSpan frame) {
+  return frame.subspan<kHeaderBytes, Message::kPayloadBytes>();
+}
+
+}  // namespace
+
+void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloadBytes> out) {
+  put_u32(out, Heartbeat::kCustomModeOffset, m.custom_mode);
+  put_u8(out, Heartbeat::kTypeOffset, m.type);
+  put_u8(out, Heartbeat::kAutopilotOffset, m.autopilot);
+  put_u8(out, Heartbeat::kBaseModeOffset, m.base_mode);
+  put_u8(out, Heartbeat::kSystemStatusOffset, m.system_status);
+  put_u8(out, Heartbeat::kMavlinkVersionOffset, m.mavlink_version);
+}
+
+void pack_payload(const Odometry& m, std::span<std::uint8_t, Odometry::kPayloadBytes> out) {
+  put_u64(out, Odometry::kTimeUsecOffset, m.time_usec);
+  put_f32(out, Odometry::kXOffset, m.x);
+  put_f32(out, Odometry::kYOffset, m.y);
+  put_f32(out, Odometry::kZOffset, m.z);
+  put_f32_array(out, Odometry::kQOffset, m.q);
+  put_f32(out, Odometry::kVxOffset, m.vx);
+  put_f32(out, Odometry::kVyOffset, m.vy);
+  put_f32(out, Odometry::kVzOffset, m.vz);
+  put_f32(out, Odometry::kRollspeedOffset, m.rollspeed);
+  put_f32(out, Odometry::kPitchspeedOffset, m.pitchspeed);
+  put_f32(out, Odometry::kYawspeedOffset, m.yawspeed);
+  put_f32_array(out, Odometry::kPoseCovarianceOffset, m.pose_covariance);
+  put_f32_array(out, Odometry::kVelocityCovarianceOffset, m.velocity_covariance);
+  put_u8(out, Odometry::kFrameIdOffset, m.frame_id);
+  put_u8(out, Odometry::kChildFrameIdOffset, m.child_frame_id);
+  put_u8(out, Odometry::kResetCounterOffset, m.reset_counter);
+  put_u8(out, Odometry::kEstimatorTypeOffset, m.estimator_type);
+  put_u8(out, Odometry::kQualityOffset, static_cast<std::uint8_t>(m.quality));  // two's complement
+}
+
+void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPositionDelta::kPayloadBytes> out) {
+  put_u64(out, VisionPositionDelta::kTimeUsecOffset, m.time_usec);
+  put_u64(out, VisionPositionDelta::kTimeDeltaUsecOffset, m.time_delta_usec);
+  put_f32_array(out, VisionPositionDelta::kAngleDeltaOffset, m.angle_delta);
+  put_f32_array(out, VisionPositionDelta::kPositionDeltaOffset, m.position_delta);
+  put_f32(out, VisionPositionDelta::kConfidenceOffset, m.confidence);
+}
+
+std::size_t trimmed_length(std::span<const std::uint8_t> payload) {
+  std::size_t n = payload.size();
+  while (n > 1 && payload[n - 1] == 0) --n;
+  return n;
+}
+
+std::size_t Framer::finish_frame(std::uint32_t message_id, std::uint8_t crc_extra, std::size_t payload_bytes,
+                                 FrameSpan out) {
+  const auto payload_len = static_cast<std::uint8_t>(trimmed_length(out.subspan(kHeaderBytes, payload_bytes)));
+  out[0] = kMagicV2;
+  out[1] = payload_len;
+  out[2] = 0;  // incompat_flags: no signing
+  out[3] = 0;  // compat_flags
+  out[4] = sequence_++;  // uint8 arithmetic: wraps 255 -> 0
+  out[5] = system_id_;
+  out[6] = component_id_;
+  out[7] = static_cast<std::uint8_t>(message_id);
+  out[8] = static_cast<std::uint8_t>(message_id >> 8);
+  out[9] = static_cast<std::uint8_t>(message_id >> 16);
+  const std::size_t crc_at = kHeaderBytes + payload_len;
+  std::uint16_t crc = crc16_mcrf4xx(std::span<const std::uint8_t>(out.data() + 1, crc_at - 1));
+  crc = crc_accumulate(crc_extra, crc);
+  out[crc_at] = static_cast<std::uint8_t>(crc & 0xFF);
+  out[crc_at + 1] = static_cast<std::uint8_t>(crc >> 8);
+  return crc_at + kChecksumBytes;
+}
+
+std::size_t Framer::encode(const Heartbeat& m, FrameSpan out) {
+  pack_payload(m, payload_area<Heartbeat>(out));
+  return finish_frame(Heartbeat::kId, Heartbeat::kCrcExtra, Heartbeat::kPayloadBytes, out);
+}
+
+std::size_t Framer::encode(const Odometry& m, FrameSpan out) {
+  pack_payload(m, payload_area<Odometry>(out));
+  return finish_frame(Odometry::kId, Odometry::kCrcExtra, Odometry::kPayloadBytes, out);
+}
+
+std::size_t Framer::encode(const VisionPositionDelta& m, FrameSpan out) {
+  pack_payload(m, payload_area<VisionPositionDelta>(out));
+  return finish_frame(VisionPositionDelta::kId, VisionPositionDelta::kCrcExtra, VisionPositionDelta::kPayloadBytes,
+                      out);
+}
+
+}  // namespace rgbdo::mavlink

@@ -1,0 +1,223 @@
+// MAVLink frames as UDP datagrams to one peer (a flight computer on Ethernet, mavlink-router,
+// a simulator). One datagram per frame, so frames can be lost but never split or merged.
+//
+// The socket is non-blocking and connect()ed to the peer: a send either goes to the kernel at
+// once or fails at once, and the ICMP "port unreachable" that comes back while nothing listens
+// on the peer's port is delivered to the socket and returned by the next send (ECONNREFUSED).
+// That is counted and reported, never fatal: sending simply goes on, and the frames reach the
+// peer as soon as it starts listening. A connect() that fails because the network is not up
+// yet (an interface still coming up at boot) is retried from send() every 0.5 s; for UDP,
+// connect() is a route lookup and never waits.
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+
+#include "transport_problem.hpp"
+#include "rgbd_odometry/link/transport.hpp"
+
+namespace rgbdo {
+namespace {
+
+using link_detail::LinkProblem;
+
+constexpr std::int64_t kConnectRetryInterval_ns = 500'000'000;
+
+struct PeerAddress {
+  sockaddr_storage address{};
+  socklen_t length = 0;
+};
+
+std::string numeric_address(const sockaddr_storage& a, socklen_t length) {
+  char host[NI_MAXHOST] = {};
+  if (getnameinfo(reinterpret_cast<const sockaddr*>(&a), length, host, sizeof host, nullptr, 0, NI_NUMERICHOST) != 0)
+    return "?";
+  std::string text(host);
+  if (a.ss_family == AF_INET6) text.insert(0, 1, '[').push_back(']');  // (GCC 12 misreads the '+' form)
+  return text;
+}
+
+// Once, at open: getaddrinfo may wait for DNS, which the output thread must never do.
+PeerAddress resolve(const UdpLinkOptions& o, const std::string& name) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_DGRAM;
+  hints.ai_flags = AI_NUMERICSERV;
+  addrinfo* list = nullptr;
+  const int rc = getaddrinfo(o.host.c_str(), std::to_string(o.port).c_str(), &hints, &list);
+  if (rc != 0) {
+    const std::string why = rc == EAI_SYSTEM ? link_detail::errno_text(errno) : gai_strerror(rc);
+    throw LinkError(name + ": cannot resolve host '" + o.host + "': " + why);
+  }
+  // IPv4 first: MAVLink endpoints (mavlink-router, PX4 SITL, QGroundControl) listen on IPv4 by
+  // default, and "localhost" often resolves to ::1 first.
+  const addrinfo* chosen = list;
+  for (const addrinfo* a = list; a != nullptr; a = a->ai_next)
+    if (a->ai_family == AF_INET) {
+      chosen = a;
+      break;
+    }
+  PeerAddress peer;
+  std::memcpy(&peer.address, chosen->ai_addr, chosen->ai_addrlen);
+  peer.length = chosen->ai_addrlen;
+  freeaddrinfo(list);
+  return peer;
+}
+
+// connect() failures that mean "the network is not up yet" rather than "this cannot work".
+bool network_not_ready(int err) {
+  return err == ENETUNREACH || err == EHOSTUNREACH || err == ENETDOWN || err == EADDRNOTAVAIL;
+}
+
+class UdpLink final : public OutputLink {
+ public:
+  explicit UdpLink(const UdpLinkOptions& o)
+      : name_("udp " + (o.host.find(':') != std::string::npos ? "[" + o.host + "]" : o.host) + ":" +
+              std::to_string(o.port)),
+        problem_(name_) {
+    const PeerAddress peer = resolve(o, name_);
+    peer_ = peer.address;
+    peer_length_ = peer.length;
+    description_ = name_ + " (" + numeric_address(peer_, peer_length_) + ")";
+    fd_ = ::socket(peer_.ss_family, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd_ < 0) throw LinkError(name_ + ": cannot create a socket: " + link_detail::errno_text(errno));
+    try {
+      // A broadcast peer (192.168.1.255) is a common MAVLink set-up; without this connect() says EACCES.
+      const int on = 1;
+      ::setsockopt(fd_, SOL_SOCKET, SO_BROADCAST, &on, sizeof on);
+      if (o.local_port != 0) bind_local(o.local_port);
+      connect_at_open();
+    } catch (...) {
+      ::close(fd_);
+      throw;
+    }
+  }
+
+  ~UdpLink() override { ::close(fd_); }
+
+  SendResult send(std::span<const std::uint8_t> frame) noexcept override {
+    if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
+      rejected_.fetch_add(1, std::memory_order_relaxed);
+      problem_.report("frame rejected: empty or longer than 280 bytes", 0, false);
+      return SendResult::Rejected;
+    }
+    if (!connected_ && !retry_connect()) {
+      dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
+      return SendResult::DroppedLinkDown;
+    }
+    const ssize_t n = ::send(fd_, frame.data(), frame.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+    if (n == static_cast<ssize_t>(frame.size())) {
+      sent_.fetch_add(1, std::memory_order_relaxed);
+      bytes_.fetch_add(frame.size(), std::memory_order_relaxed);
+      up_.store(true, std::memory_order_relaxed);
+      return SendResult::Sent;
+    }
+    const int err = n < 0 ? errno : EMSGSIZE;  // a datagram goes whole or not at all
+    if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
+      dropped_queue_full_.fetch_add(1, std::memory_order_relaxed);
+      problem_.report("socket send buffer full, frame dropped", err, false);
+      return SendResult::DroppedBufferFull;
+    }
+    errors_.fetch_add(1, std::memory_order_relaxed);
+    dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
+    up_.store(false, std::memory_order_relaxed);
+    problem_.report(err == ECONNREFUSED ? "peer refused a datagram (nothing listening on its port?)" : "send failed",
+                    err, false);
+    return SendResult::DroppedLinkDown;
+  }
+
+  LinkStats stats() const override {
+    LinkStats s;
+    s.frames_sent = sent_.load(std::memory_order_relaxed);
+    s.bytes_sent = bytes_.load(std::memory_order_relaxed);
+    s.frames_dropped_queue_full = dropped_queue_full_.load(std::memory_order_relaxed);
+    s.frames_dropped_link_down = dropped_link_down_.load(std::memory_order_relaxed);
+    s.frames_rejected = rejected_.load(std::memory_order_relaxed);
+    s.errors = errors_.load(std::memory_order_relaxed);
+    s.reconnects = reconnects_.load(std::memory_order_relaxed);
+    s.problem_reports = problem_.reports();
+    s.link_up = up_.load(std::memory_order_relaxed);
+    return s;
+  }
+
+  std::string last_problem() const override { return problem_.text(); }
+  std::string description() const override { return description_; }
+
+ private:
+  void bind_local(std::uint16_t local_port) {
+    sockaddr_storage local{};
+    socklen_t length = 0;
+    if (peer_.ss_family == AF_INET6) {
+      auto& a = reinterpret_cast<sockaddr_in6&>(local);
+      a.sin6_family = AF_INET6;
+      a.sin6_addr = in6addr_any;
+      a.sin6_port = htons(local_port);
+      length = sizeof a;
+    } else {
+      auto& a = reinterpret_cast<sockaddr_in&>(local);
+      a.sin_family = AF_INET;
+      a.sin_addr.s_addr = htonl(INADDR_ANY);
+      a.sin_port = htons(local_port);
+      length = sizeof a;
+    }
+    if (::bind(fd_, reinterpret_cast<const sockaddr*>(&local), length) != 0)
+      throw LinkError(name_ + ": cannot bind local port " + std::to_string(local_port) + ": " +
+                      link_detail::errno_text(errno));
+    description_ += " from local port " + std::to_string(local_port);
+  }
+
+  void connect_at_open() {
+    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&peer_), peer_length_) == 0) {
+      connected_ = true;
+      up_.store(true, std::memory_order_relaxed);
+      return;
+    }
+    const int err = errno;
+    if (!network_not_ready(err)) throw LinkError(name_ + ": cannot connect: " + link_detail::errno_text(err));
+    errors_.fetch_add(1, std::memory_order_relaxed);
+    problem_.report("no route to the peer yet; retrying every 0.5 s", err);
+    next_connect_ns_ = steady_now_ns() + kConnectRetryInterval_ns;
+  }
+
+  bool retry_connect() noexcept {
+    const std::int64_t now_ns = steady_now_ns();
+    if (now_ns < next_connect_ns_) return false;
+    next_connect_ns_ = now_ns + kConnectRetryInterval_ns;
+    if (::connect(fd_, reinterpret_cast<const sockaddr*>(&peer_), peer_length_) == 0) {
+      connected_ = true;
+      reconnects_.fetch_add(1, std::memory_order_relaxed);
+      return true;
+    }
+    errors_.fetch_add(1, std::memory_order_relaxed);
+    problem_.report("no route to the peer yet; retrying every 0.5 s", errno, false);
+    return false;
+  }
+
+  const std::string name_;
+  std::string description_;
+  int fd_ = -1;
+  sockaddr_storage peer_{};
+  socklen_t peer_length_ = 0;
+  // Touched by send() only, hence by one thread.
+  bool connected_ = false;
+  std::int64_t next_connect_ns_ = 0;
+  // Read by stats() from any thread.
+  std::atomic<std::uint64_t> sent_{0}, bytes_{0}, dropped_queue_full_{0}, dropped_link_down_{0}, rejected_{0},
+      errors_{0}, reconnects_{0};
+  std::atomic<bool> up_{false};
+  LinkProblem problem_;
+};
+
+}  // namespace
+
+std::unique_ptr<OutputLink> open_udp_link(const UdpLinkOptions& options) {
+  if (options.port == 0) throw LinkError("udp " + options.host + ": port 0 is not a peer port (1-65535)");
+  return std::make_unique<UdpLink>(options);
+}
+
+}  // namespace rgbdo

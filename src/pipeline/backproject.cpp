@@ -1,0 +1,107 @@
+#include "rgbd_odometry/pipeline/backproject.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+
+namespace rgbdo {
+namespace {
+
+constexpr int kEdgeRadiusPx = 2;  // 5x5: Kinect-v1 depth is block-matched over ~9 px windows
+
+}  // namespace
+
+void KeypointGeometry::clear() {
+  normalized.clear();
+  pixel.clear();
+  depth_m.clear();
+  depth_gradient.clear();
+}
+
+void PointPairs::clear() {
+  prev.clear();
+  curr.clear();
+  match_index.clear();
+}
+
+KeypointBackProjector::KeypointBackProjector(const CameraConfig& camera, const DepthConfig& depth)
+    : camera_matrix_((cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1)),
+      distortion_(cv::Mat(1, 5, CV_64F, const_cast<double*>(camera.distortion.data())).clone()),
+      depth_(depth) {}
+
+void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& depth_m,
+                                    KeypointGeometry& out) {
+  CV_Assert(depth_m.type() == CV_32FC1);
+  out.clear();
+  const size_t n = keypoints.size();
+  distorted_.resize(n);
+  for (size_t i = 0; i < n; ++i) distorted_[i] = keypoints[i].pt;
+  if (n > 0) cv::undistortPoints(distorted_, undistorted_, camera_matrix_, distortion_);
+
+  const int r = kEdgeRadiusPx;
+  for (size_t i = 0; i < n; ++i) {
+    out.normalized.emplace_back(undistorted_[i].x, undistorted_[i].y);
+    out.pixel.emplace_back(distorted_[i].x, distorted_[i].y);
+    const int u = static_cast<int>(std::lround(distorted_[i].x));
+    const int v = static_cast<int>(std::lround(distorted_[i].y));
+    double z = 0;
+    Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
+    if (u >= r && v >= r && u < depth_m.cols - r && v < depth_m.rows - r) {
+      const double centre = depth_m.at<float>(v, u);
+      float lo = depth_m.at<float>(v, u), hi = lo;
+      for (int dv = -r; dv <= r; ++dv) {
+        const float* row = depth_m.ptr<float>(v + dv);
+        for (int du = -r; du <= r; ++du) {
+          lo = std::min(lo, row[u + du]);
+          hi = std::max(hi, row[u + du]);
+        }
+      }
+      // All neighbours valid and no depth step: the keypoint is not on an occlusion edge,
+      // where its colour and its depth may belong to different surfaces.
+      if (centre >= depth_.min_m && centre <= depth_.max_m && lo > 0 &&
+          (hi - lo) <= depth_.edge_max_relative_step * centre) {
+        z = centre;
+        gradient.x() = (depth_m.at<float>(v, u + r) - depth_m.at<float>(v, u - r)) / (2.0 * r);
+        gradient.y() = (depth_m.at<float>(v + r, u) - depth_m.at<float>(v - r, u)) / (2.0 * r);
+      }
+    }
+    out.depth_m.push_back(z);
+    out.depth_gradient.push_back(gradient);
+  }
+}
+
+void build_point_pairs(const std::vector<Match>& matches, const KeypointGeometry& prev, const FrameTimes& prev_times,
+                       const KeypointGeometry& curr, const FrameTimes& curr_times, const MotionPrior* prior,
+                       PointPairs& out) {
+  out.clear();
+  const double dt_colour = static_cast<double>(curr_times.t_colour_ns - prev_times.t_colour_ns) * 1e-9;
+  const double prev_offset = static_cast<double>(prev_times.t_colour_ns - prev_times.t_depth_ns) * 1e-9;
+  const double curr_offset = static_cast<double>(curr_times.t_colour_ns - curr_times.t_depth_ns) * 1e-9;
+  const bool compensate = prior != nullptr && dt_colour > 0;
+
+  // Depth at the colour instant, first order in the time offset (see header).
+  const auto depth_at_colour_time = [&](double z, const Eigen::Vector2d& xn, const Eigen::Vector2d& gradient,
+                                        const Eigen::Vector2d& pixel_velocity, double offset) {
+    if (!compensate || offset == 0) return z;
+    const Eigen::Vector3d p(xn.x() * z, xn.y() * z, z);
+    const double z_rate = -(prior->velocity_mps + prior->angular_velocity_radps.cross(p)).z();
+    return z + offset * (z_rate - gradient.dot(pixel_velocity));
+  };
+
+  for (size_t k = 0; k < matches.size(); ++k) {
+    const auto i = static_cast<size_t>(matches[k].prev);
+    const auto j = static_cast<size_t>(matches[k].curr);
+    if (prev.depth_m[i] <= 0 || curr.depth_m[j] <= 0) continue;
+    const Eigen::Vector2d pixel_velocity =
+        compensate ? Eigen::Vector2d((curr.pixel[j] - prev.pixel[i]) / dt_colour) : Eigen::Vector2d::Zero();
+    const double zp = depth_at_colour_time(prev.depth_m[i], prev.normalized[i], prev.depth_gradient[i],
+                                           pixel_velocity, prev_offset);
+    const double zc = depth_at_colour_time(curr.depth_m[j], curr.normalized[j], curr.depth_gradient[j],
+                                           pixel_velocity, curr_offset);
+    out.prev.emplace_back(prev.normalized[i].x() * zp, prev.normalized[i].y() * zp, zp);
+    out.curr.emplace_back(curr.normalized[j].x() * zc, curr.normalized[j].y() * zc, zc);
+    out.match_index.push_back(static_cast<int>(k));
+  }
+}
+
+}  // namespace rgbdo

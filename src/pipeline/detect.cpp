@@ -1,0 +1,41 @@
+#include "rgbd_odometry/pipeline/detect.hpp"
+
+#include <stdexcept>
+
+namespace rgbdo {
+namespace {
+
+cv::Ptr<cv::Feature2D> create_feature2d(const std::string& name, const FeatureConfig& c) {
+  const int max_features = c.max_features;
+  if (name == "ORB")
+    return cv::ORB::create(max_features, static_cast<float>(c.orb_scale_factor), c.orb_levels, 31, 0, 2,
+                           cv::ORB::HARRIS_SCORE, 31, c.fast_threshold);
+  if (name == "AKAZE") return cv::AKAZE::create();
+  if (name == "BRISK") return cv::BRISK::create();
+  if (name == "SIFT") return cv::SIFT::create(max_features);
+  if (name == "KAZE") return cv::KAZE::create();
+  if (name == "FAST") return cv::FastFeatureDetector::create();
+  if (name == "GFTT") return cv::GFTTDetector::create(max_features);
+  if (name == "AGAST") return cv::AgastFeatureDetector::create();
+  throw std::invalid_argument("unknown OpenCV Feature2D '" + name + "'");
+}
+
+}  // namespace
+
+FeatureDetector::FeatureDetector(const FeatureConfig& config) {
+  detector_ = create_feature2d(config.detector, config);
+  descriptor_ = config.descriptor == config.detector ? detector_ : create_feature2d(config.descriptor, config);
+  binary_ = descriptor_->defaultNorm() == cv::NORM_HAMMING;
+}
+
+void FeatureDetector::detect(const cv::Mat& gray, const cv::Mat& mask, Features& out) {
+  out.keypoints.clear();
+  if (detector_ == descriptor_) {
+    detector_->detectAndCompute(gray, mask, out.keypoints, out.descriptors);
+  } else {
+    detector_->detect(gray, out.keypoints, mask);
+    descriptor_->compute(gray, out.keypoints, out.descriptors);
+  }
+}
+
+}  // namespace rgbdo

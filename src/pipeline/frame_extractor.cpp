@@ -1,0 +1,37 @@
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+
+#include <opencv2/core.hpp>
+
+#include "rgbd_odometry/pipeline/mask.hpp"
+
+namespace rgbdo {
+
+FrameExtractor::FrameExtractor(const Config& config)
+    : depth_(config.depth),
+      border_px_(config.features.border_px),
+      min_features_(config.ransac.min_inliers),
+      detector_(config.features),
+      backprojector_(config.camera, config.depth) {}
+
+void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
+  out.times = {frame.t_colour_ns, frame.t_depth_ns};
+  out.status = frame.status;
+  out.problem = frame.problem;  // empty for good frames: no allocation
+  out.features.keypoints.clear();
+  out.geometry.clear();
+  if (frame.status != Status::Ok) return;
+  if (frame.gray.empty() || frame.depth_m.empty() || frame.gray.size() != frame.depth_m.size()) {
+    out.status = Status::BadFrame;
+    return;
+  }
+  build_feature_mask(frame.depth_m, depth_, border_px_, mask_);
+  if (cv::countNonZero(mask_) == 0) {
+    out.status = Status::NoDepth;
+    return;
+  }
+  detector_.detect(frame.gray, mask_, out.features);
+  backprojector_.compute(out.features.keypoints, frame.depth_m, out.geometry);
+  if (static_cast<int>(out.features.keypoints.size()) < min_features_) out.status = Status::TooFewFeatures;
+}
+
+}  // namespace rgbdo

@@ -1,0 +1,26 @@
+#include "rgbd_odometry/pipeline/odometry.hpp"
+
+#include <chrono>
+#include <utility>
+
+#include "rgbd_odometry/core/clock.hpp"
+
+namespace rgbdo {
+
+OdometryPipeline::OdometryPipeline(const Config& config) : extractor_(config), estimator_(config) {}
+
+std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  extractor_.extract(frame, curr_);
+  const double detect_ms = ms_since(start);
+  std::optional<PairResult> result;
+  if (have_prev_) {
+    result = estimator_.estimate(prev_, curr_, pair_index_++);
+    result->times.detect_ms = detect_ms;
+  }
+  std::swap(prev_, curr_);  // swap, not copy: buffers are reused frame after frame
+  have_prev_ = true;
+  return result;
+}
+
+}  // namespace rgbdo

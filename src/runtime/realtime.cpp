@@ -1,0 +1,306 @@
+#include "rgbd_odometry/runtime/realtime.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+
+#include <chrono>
+#include <iomanip>
+#include <mutex>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "rgbd_odometry/core/clock.hpp"
+#include "rgbd_odometry/runtime/bounded_queue.hpp"
+#include "rgbd_odometry/runtime/frame_mailbox.hpp"
+#include "rgbd_odometry/sensor/usb_devices.hpp"
+#include "rgbd_odometry/pipeline/pair_estimator.hpp"
+#include "rgbd_odometry/pipeline/frame_extractor.hpp"
+
+namespace rgbdo {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr auto kPoll = std::chrono::milliseconds(50);  // bound of every wait that must notice a stop
+constexpr auto kStatusPeriod = std::chrono::seconds(10);
+constexpr std::size_t kProcessedSlots = 4;  // previous + current (estimation), one extracting, one ready
+constexpr std::size_t kOutputDepth = 64;
+
+struct ProcessedSlot {
+  ProcessedFrame frame;
+  std::int64_t t_capture_host_ns = 0;
+  int skipped_before = 0;
+  bool after_gap = false;
+  double detect_ms = 0;
+};
+
+void check_cpus_allowed(const std::vector<int>& cpus) {
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) return;
+  for (const int cpu : cpus)
+    if (cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &allowed))
+      throw ConfigError("config key 'runtime.cpu_affinity': CPU " + std::to_string(cpu) +
+                        " is not available to this process (this machine has " +
+                        std::to_string(std::thread::hardware_concurrency()) + " CPUs)");
+}
+
+// Pins the calling thread to the role's CPU (roles: 0 capture, 1 extraction, 2 estimation, 3 output).
+void pin_thread(const std::vector<int>& cpus, int role) {
+  if (cpus.empty()) return;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpus[static_cast<size_t>(role) % cpus.size()], &set);
+  pthread_setaffinity_np(pthread_self(), sizeof set, &set);  // checked up front by check_cpus_allowed
+}
+
+// One run's shared state; every thread function is a member.
+class Run {
+ public:
+  Run(const Config& config, FrameFeed& feed, const RealtimePipeline::OutputFn& on_output,
+      const RealtimePipeline::MessageFn& on_message, const std::function<void()>& on_tick)
+      : on_tick_(on_tick), config_(config), cpus_(parse_cpu_list(config.runtime.cpu_affinity)), feed_(feed), on_output_(on_output),
+        on_message_(on_message), mailbox_(!feed.live()), extractor_(config), estimator_(config) {
+    check_cpus_allowed(cpus_);
+    // USB hot-plug tells when a sensor comes back sooner than the next re-open attempt would.
+    if (feed.live()) usb_ = std::make_unique<UsbWatcher>();
+    for (std::size_t i = 0; i < kProcessedSlots; ++i) free_.push(static_cast<int>(i));
+  }
+
+  RealtimeStats go(const std::atomic<bool>& stop) {
+    std::vector<std::thread> threads;
+    threads.emplace_back([this] { capture(); });
+    if (config_.runtime.processing_threads == 2) {
+      threads.emplace_back([this] { extraction(); });
+      threads.emplace_back([this] { estimation(); });
+    } else {
+      threads.emplace_back([this] { extract_and_estimate(); });
+    }
+    threads.emplace_back([this] { output(); });
+    bool stopping = false;
+    while (!output_done_) {
+      if (stop && !stopping) {
+        stopping = true;
+        stopping_ = true;
+        feed_.interrupt();
+        mailbox_.close();  // what is in hand is finished and output; nothing new is taken
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    for (auto& t : threads) t.join();
+    stats_.skipped = mailbox_.skipped();
+    stats_.dropped_by_sensor = feed_.dropped_frames();
+    return stats_;
+  }
+
+ private:
+  // --- capture thread -------------------------------------------------------------------
+  void capture() {
+    pin_thread(cpus_, 0);
+    bool after_gap = false;
+    std::string problem;
+    while (!stopping_) {
+      CapturedFrame& slot = mailbox_.fill_slot();
+      problem.clear();
+      const FeedState state = feed_.next(slot.frame, problem);
+      if (state == FeedState::End) {
+        if (!problem.empty() && !stopping_) message("source ended: " + problem);
+        break;
+      }
+      if (state == FeedState::Lost) {
+        ++stats_.sensor_losses;
+        message("sensor lost: " + problem);
+        if (!reopen_sensor()) break;
+        ++stats_.reopens;
+        message("sensor back: " + feed_.description() + "; odometry restarts (reset)");
+        after_gap = true;
+        continue;
+      }
+      // A live frame's colour time is on the host steady clock already (sensor_openni.hpp).
+      slot.t_capture_host_ns = feed_.live() ? slot.frame.t_colour_ns : steady_now_ns();
+      slot.skipped_before = 0;
+      slot.after_gap = after_gap;
+      after_gap = false;
+      if (!mailbox_.publish()) break;
+    }
+    mailbox_.close();
+  }
+
+  // Tries to re-open every reconnect_interval_ms until it works, the timeout passes or a stop.
+  bool reopen_sensor() {
+    const double timeout_s = config_.sensor.reconnect_timeout_s;
+    if (timeout_s == 0) return false;
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                                             timeout_s < 0 ? 1e9 : timeout_s));
+    std::string problem;
+    while (!stopping_ && Clock::now() < deadline) {
+      if (feed_.reopen(problem)) return true;
+      const auto until = Clock::now() + std::chrono::milliseconds(config_.sensor.reconnect_interval_ms);
+      const std::uint64_t arrivals = usb_ ? usb_->arrivals() : 0;
+      while (!stopping_ && Clock::now() < until && (!usb_ || usb_->arrivals() == arrivals))
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (!stopping_) message("sensor did not come back within " + std::to_string(timeout_s) + " s: " + problem);
+    return false;
+  }
+
+  // --- processing threads ---------------------------------------------------------------
+  void extract_into(const CapturedFrame& in, ProcessedSlot& out) {
+    const auto start = Clock::now();
+    extractor_.extract(in.frame, out.frame);
+    out.detect_ms = ms_since(start);
+    out.t_capture_host_ns = in.t_capture_host_ns;
+    out.skipped_before = in.skipped_before;
+    out.after_gap = in.after_gap;
+  }
+
+  void extraction() {
+    pin_thread(cpus_, 1);
+    while (CapturedFrame* in = mailbox_.take()) {
+      const auto slot = free_.pop();
+      if (!slot) break;
+      extract_into(*in, slots_[static_cast<size_t>(*slot)]);
+      ready_.push(*slot);
+    }
+    ready_.close();
+  }
+
+  void estimation() {
+    pin_thread(cpus_, 2);
+    int prev = -1;
+    while (const auto curr = ready_.pop()) {
+      estimate(prev, *curr);
+      if (prev >= 0) free_.push(prev);
+      prev = *curr;
+    }
+    outputs_.close();
+  }
+
+  // runtime.processing_threads = 1: both stages in turn, on one thread.
+  void extract_and_estimate() {
+    pin_thread(cpus_, 1);
+    int prev = -1, curr = 0;
+    while (CapturedFrame* in = mailbox_.take()) {
+      extract_into(*in, slots_[static_cast<size_t>(curr)]);
+      estimate(prev, curr);
+      prev = curr;
+      curr = (curr + 1) % 2;
+    }
+    outputs_.close();
+  }
+
+  void estimate(int prev_index, int curr_index) {
+    const ProcessedSlot& curr = slots_[static_cast<size_t>(curr_index)];
+    PairOutput out;
+    out.t_frame_ns = curr.frame.times.t_colour_ns;
+    out.t_capture_host_ns = curr.t_capture_host_ns;
+    out.skipped = curr.skipped_before;
+    out.frame_problem = curr.frame.problem;
+    if (prev_index >= 0) {
+      const ProcessedSlot& prev = slots_[static_cast<size_t>(prev_index)];
+      out.has_pair = true;
+      if (curr.after_gap) {
+        // Whatever moved while the sensor was away is unknown: a failed pair, and no motion
+        // prior carried across the gap.
+        PairResult& r = out.result;
+        r.t_prev_ns = prev.frame.times.t_colour_ns;
+        r.t_curr_ns = curr.frame.times.t_colour_ns;
+        r.status = Status::SensorLost;
+        r.features_prev = static_cast<int>(prev.frame.features.keypoints.size());
+        r.features_curr = static_cast<int>(curr.frame.features.keypoints.size());
+        estimator_.forget_motion();
+        ++pair_index_;
+      } else {
+        out.result = estimator_.estimate(prev.frame, curr.frame, pair_index_++);
+      }
+      out.result.times.detect_ms = curr.detect_ms;
+    }
+    outputs_.push(std::move(out));
+  }
+
+  // --- output thread --------------------------------------------------------------------
+  void output() {
+    pin_thread(cpus_, 3);
+    auto next_status = Clock::now() + kStatusPeriod;
+    std::uint64_t frames_at_status = 0, usb_departures = 0;
+    if (usb_ && !usb_->problem().empty()) on_message_(usb_->problem());
+    for (;;) {
+      auto item = outputs_.pop_for(kPoll);
+      flush_messages();
+      if (on_tick_) on_tick_();
+      if (usb_ && usb_->departures() != usb_departures) {
+        usb_departures = usb_->departures();
+        on_message_("USB: an RGB-D sensor left the bus");
+      }
+      if (item) {
+        ++stats_.frames;
+        if (item->has_pair) {
+          ++stats_.pairs;
+          item->latency_ms = static_cast<double>(steady_now_ns() - item->t_capture_host_ns) * 1e-6;
+          stats_.latency.add(item->latency_ms);
+        }
+        on_output_(*item);
+      } else if (outputs_.closed_and_empty()) {
+        break;
+      }
+      if (feed_.live() && Clock::now() >= next_status) {
+        std::ostringstream s;
+        s << std::fixed << std::setprecision(1) << "status: " << (stats_.frames - frames_at_status) / 10.0
+          << " frames/s, " << mailbox_.skipped() << " skipped, " << feed_.dropped_frames()
+          << " dropped by the sensor, latency median " << stats_.latency.quantile_ms(0.5) << " ms, p99 "
+          << stats_.latency.quantile_ms(0.99) << " ms";
+        on_message_(s.str());
+        frames_at_status = stats_.frames;
+        next_status += kStatusPeriod;
+      }
+    }
+    flush_messages();
+    output_done_ = true;
+  }
+
+  // Messages are raised on the capture thread but printed on the output thread, so that each
+  // output stream has a single writer.
+  void message(std::string text) {
+    std::lock_guard<std::mutex> lock(messages_mutex_);
+    messages_.push_back(std::move(text));
+  }
+  void flush_messages() {
+    std::vector<std::string> pending;
+    {
+      std::lock_guard<std::mutex> lock(messages_mutex_);
+      pending.swap(messages_);
+    }
+    for (const auto& m : pending) on_message_(m);
+  }
+
+  const std::function<void()>& on_tick_;
+  const Config& config_;
+  const std::vector<int> cpus_;
+  FrameFeed& feed_;
+  const RealtimePipeline::OutputFn& on_output_;
+  const RealtimePipeline::MessageFn& on_message_;
+  std::unique_ptr<UsbWatcher> usb_;
+  FrameMailbox mailbox_;
+  FrameExtractor extractor_;  // the extraction thread's
+  PairEstimator estimator_;   // the estimation thread's
+  std::array<ProcessedSlot, kProcessedSlots> slots_;
+  BoundedQueue<int, kProcessedSlots> free_, ready_;
+  BoundedQueue<PairOutput, kOutputDepth> outputs_;
+  std::uint64_t pair_index_ = 0;
+  std::atomic<bool> stopping_{false}, output_done_{false};
+  std::mutex messages_mutex_;
+  std::vector<std::string> messages_;
+  RealtimeStats stats_;  // each field has one writing thread; read after the joins
+};
+
+}  // namespace
+
+RealtimePipeline::RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message)
+    : config_(config), feed_(feed), on_output_(std::move(on_output)), on_message_(std::move(on_message)) {}
+
+RealtimeStats RealtimePipeline::run(const std::atomic<bool>& stop) {
+  auto run = std::make_unique<Run>(config_, feed_, on_output_, on_message_, on_tick_);
+  return run->go(stop);
+}
+
+}  // namespace rgbdo

@@ -1,0 +1,283 @@
+#include "rgbd_odometry/sensor/sensor_openni.hpp"
+
+#include <OpenNI.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "rgbd_odometry/core/clock.hpp"
+#include "rgbd_odometry/sensor/device_clock.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"  // SourceError
+
+namespace rgbdo {
+namespace {
+
+constexpr std::int64_t kMaxColourDepthOffsetNs = 20'000'000;
+constexpr int kDepthHistory = 4;  // depth frames kept for pairing (~130 ms at 30 Hz)
+// Waits are cut into slices this long so that interrupt() and an unplug are noticed promptly
+// (the program must stop within a second of SIGINT whatever the sensor does).
+constexpr int kWaitSliceMs = 50;
+
+void initialise_openni() {
+  if (openni::OpenNI::initialize() != openni::STATUS_OK)
+    throw SourceError(std::string("OpenNI2 could not be initialised: ") + openni::OpenNI::getExtendedError());
+}
+
+std::string mode_text(const openni::VideoMode& m) {
+  std::ostringstream s;
+  s << m.getResolutionX() << "x" << m.getResolutionY() << "@" << m.getFps() << " format " << m.getPixelFormat();
+  return s.str();
+}
+
+// The device's mode with the requested size and rate, in the first acceptable pixel format.
+openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int fps,
+                              std::initializer_list<openni::PixelFormat> formats, const char* what) {
+  const auto& modes = info.getSupportedVideoModes();
+  for (const auto format : formats)
+    for (int i = 0; i < modes.getSize(); ++i)
+      if (modes[i].getResolutionX() == w && modes[i].getResolutionY() == h && modes[i].getFps() == fps &&
+          modes[i].getPixelFormat() == format)
+        return modes[i];
+  std::ostringstream s;
+  s << "the device offers no " << what << " mode " << w << "x" << h << "@" << fps << "; it offers:";
+  for (int i = 0; i < modes.getSize(); ++i) s << " " << mode_text(modes[i]);
+  throw SourceError(s.str());
+}
+
+}  // namespace
+
+struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
+  OpenNiOptions options;
+  std::string uri;  // of the open device, as the runtime names it
+  std::atomic<bool> interrupted{false}, unplugged{false};
+  openni::Device device;
+  openni::VideoStream colour, depth;
+  openni::Recorder recorder;
+  double depth_m_per_unit = 0.001;
+  // Device microseconds -> host nanoseconds: anchored at the first frame's arrival, then
+  // following the crystal's rate against the host's (src/sensor/device_clock.cpp). Intervals stay the
+  // device's to parts per million (odometry divides by them), host times do not walk away.
+  DeviceClock clock;
+  struct DepthSlot {
+    std::int64_t t_ns = 0;
+    cv::Mat depth_m;
+  };
+  std::array<DepthSlot, kDepthHistory> depth_history;
+  int depth_count = 0;
+  int last_colour_index = -1;
+  int dropped = 0;
+  // A recording played by OniFile at "manual" speed: it reads the next frame of the file each
+  // time a wait finds no frame ready ("pokes" the device). Its frames must be waited for in one
+  // wait each: a second poke while the player is still decoding makes it deliver two frames,
+  // and the first is overwritten before it is read (the likely cause of frames lost from a
+  // playback under load).
+  bool playback = false;
+  int colour_frames_in_file = 0, colour_frames_read = 0, depth_frames_in_file = 0;
+
+  // Called on an OpenNI2 thread when any device goes away.
+  void onDeviceDisconnected(const openni::DeviceInfo* info) override {
+    if (info && uri == info->getUri()) unplugged = true;
+  }
+
+  std::int64_t to_host(std::uint64_t device_us) {
+    return clock.to_host(static_cast<std::int64_t>(device_us) * 1000, steady_now_ns());
+  }
+};
+
+std::vector<DeviceDescription> list_openni_devices() {
+  initialise_openni();
+  openni::Array<openni::DeviceInfo> infos;
+  openni::OpenNI::enumerateDevices(&infos);
+  std::vector<DeviceDescription> out;
+  for (int i = 0; i < infos.getSize(); ++i)
+    out.push_back({infos[i].getUri(), infos[i].getVendor(), infos[i].getName(),
+                   static_cast<std::uint16_t>(infos[i].getUsbVendorId()),
+                   static_cast<std::uint16_t>(infos[i].getUsbProductId())});
+  return out;
+}
+
+OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_unique<Impl>()) {
+  auto& s = *impl_;
+  s.options = options;
+  initialise_openni();
+  const char* uri = options.uri.empty() ? openni::ANY_DEVICE : options.uri.c_str();
+  if (s.device.open(uri) != openni::STATUS_OK)
+    throw SourceError("cannot open OpenNI2 device '" + (options.uri.empty() ? std::string("(first found)") : options.uri) +
+                      "': " + openni::OpenNI::getExtendedError());
+  const openni::SensorInfo* colour_info = s.device.getSensorInfo(openni::SENSOR_COLOR);
+  const openni::SensorInfo* depth_info = s.device.getSensorInfo(openni::SENSOR_DEPTH);
+  if (!colour_info || !depth_info) throw SourceError("the OpenNI2 device has no colour or no depth sensor");
+  const auto colour_mode =
+      choose_mode(*colour_info, options.width, options.height, options.fps, {openni::PIXEL_FORMAT_RGB888}, "colour");
+  const auto depth_mode = choose_mode(*depth_info, options.width, options.height, options.fps,
+                                      {openni::PIXEL_FORMAT_DEPTH_100_UM, openni::PIXEL_FORMAT_DEPTH_1_MM}, "depth");
+  s.depth_m_per_unit = depth_mode.getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM ? 1e-4 : 1e-3;
+
+  if (s.colour.create(s.device, openni::SENSOR_COLOR) != openni::STATUS_OK ||
+      s.depth.create(s.device, openni::SENSOR_DEPTH) != openni::STATUS_OK)
+    throw SourceError(std::string("cannot create the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
+  const bool playback = s.playback = s.device.isFile();
+  s.clock = DeviceClock(/*follow_rate=*/!playback);
+  // A recording plays in the modes it was recorded in (choose_mode checked them above).
+  if (!playback &&
+      (s.colour.setVideoMode(colour_mode) != openni::STATUS_OK || s.depth.setVideoMode(depth_mode) != openni::STATUS_OK))
+    throw SourceError(std::string("the device refused the video modes: ") + openni::OpenNI::getExtendedError());
+  if (playback) {
+    // Play once, each frame when it is read ("manual" speed): a recording is replayed
+    // losslessly, at the pace of the pipeline, as a TUM sequence is.
+    s.device.getPlaybackControl()->setRepeatEnabled(false);
+    s.device.getPlaybackControl()->setSpeed(-1.0f);
+    s.colour_frames_in_file = s.device.getPlaybackControl()->getNumberOfFrames(s.colour);
+    s.depth_frames_in_file = s.device.getPlaybackControl()->getNumberOfFrames(s.depth);
+  }
+  if (options.registration && !playback) {  // a recording is registered, or not, already
+    if (!s.device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) ||
+        s.device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) != openni::STATUS_OK)
+      throw SourceError("the device cannot register depth to colour in hardware");
+  }
+  // Frame sync where the driver offers it; pairing by timestamp below works either way.
+  (void)s.device.setDepthColorSyncEnabled(true);
+  (void)s.colour.setMirroringEnabled(false);
+  (void)s.depth.setMirroringEnabled(false);
+  s.uri = s.device.getDeviceInfo().getUri();
+  // The recorder starts before the streams do, so that their first frames are in the file.
+  if (!options.record_path.empty() &&
+      (s.recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
+       s.recorder.attach(s.colour) != openni::STATUS_OK || s.recorder.attach(s.depth) != openni::STATUS_OK ||
+       s.recorder.start() != openni::STATUS_OK))
+    throw SourceError("cannot record to '" + options.record_path + "': " + openni::OpenNI::getExtendedError());
+  if (openni::OpenNI::addDeviceDisconnectedListener(impl_.get()) != openni::STATUS_OK)
+    throw SourceError("cannot watch the OpenNI2 device for disconnection");
+  if (s.colour.start() != openni::STATUS_OK || s.depth.start() != openni::STATUS_OK) {
+    openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
+    throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
+  }
+  for (auto& slot : s.depth_history) slot.depth_m.create(options.height, options.width, CV_32FC1);
+}
+
+OpenNiSource::~OpenNiSource() {
+  openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
+  if (impl_->recorder.isValid()) {
+    impl_->recorder.stop();
+    impl_->recorder.destroy();
+  }
+  impl_->colour.stop();
+  impl_->depth.stop();
+  impl_->colour.destroy();
+  impl_->depth.destroy();
+  impl_->device.close();
+}
+
+int OpenNiSource::dropped_colour_frames() const { return impl_->dropped; }
+
+void OpenNiSource::interrupt() { impl_->interrupted = true; }
+
+std::string OpenNiSource::description() const {
+  const auto& s = *impl_;
+  std::ostringstream d;
+  d << s.device.getDeviceInfo().getVendor() << " " << s.device.getDeviceInfo().getName() << " ("
+    << s.device.getDeviceInfo().getUri() << "), colour " << mode_text(s.colour.getVideoMode()) << ", depth "
+    << mode_text(s.depth.getVideoMode());
+  return d.str();
+}
+
+bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
+  auto& s = *impl_;
+  openni::VideoStream* streams[] = {&s.colour, &s.depth};
+  openni::VideoFrameRef frame;
+  const auto kept = [&] { return std::min(s.depth_count, kDepthHistory); };
+  const auto depth_at_or_after = [&](std::int64_t t) {
+    for (int k = 0; k < kept(); ++k)
+      if (s.depth_history[static_cast<size_t>(k)].t_ns >= t) return true;
+    return false;
+  };
+  bool have_colour = false;
+  std::int64_t colour_t = 0;
+  // One wait for any stream, in slices (one wait for a recording, see Impl::playback); -1: the
+  // budget ran out, -2: interrupted or unplugged.
+  // Frames that arrived before an unplug are still read: they are as good as any other (the
+  // virtual sensor unplugs itself right after the last frame of its recording).
+  const auto wait_for_stream = [&](int budget_ms) {
+    if (s.playback) {
+      if (s.interrupted) return -2;
+      int ready = -1;
+      return openni::OpenNI::waitForAnyStream(streams, 2, &ready, budget_ms) == openni::STATUS_OK ? ready : -1;
+    }
+    for (int waited = 0; waited < budget_ms; waited += kWaitSliceMs) {
+      if (s.interrupted) return -2;
+      int ready = -1;
+      if (s.unplugged)
+        return openni::OpenNI::waitForAnyStream(streams, 2, &ready, 0) == openni::STATUS_OK ? ready : -2;
+      if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, std::min(kWaitSliceMs, budget_ms - waited)) ==
+          openni::STATUS_OK)
+        return ready;
+    }
+    return -1;
+  };
+  // Collect until a colour frame is in hand and a depth frame at or after it has arrived
+  // (the nearest depth can come up to 17 ms after its colour frame), or the wait runs out.
+  if (s.playback && s.colour_frames_read >= s.colour_frames_in_file) {
+    problem = "all " + std::to_string(s.colour_frames_in_file) + " colour frames of the file read";
+    return false;
+  }
+  while (!(have_colour && depth_at_or_after(colour_t))) {
+    // A recording holds its next depth frame unless all were read: wait for it as for any frame,
+    // so that pairing never depends on how fast the player decodes.
+    if (have_colour && s.playback && s.depth_count >= s.depth_frames_in_file) break;
+    const int ready = wait_for_stream(have_colour && !s.playback ? s.options.pairing_wait_ms
+                                                                  : s.options.frame_timeout_ms);
+    if (ready == -2) {
+      if (have_colour && !s.interrupted) break;  // unplugged: the frame in hand goes out first
+      problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
+      return false;
+    }
+    if (ready < 0) {
+      if (have_colour) break;  // no later depth: pair with what there is
+      problem = "no frame from the sensor for " + std::to_string(s.options.frame_timeout_ms) + " ms (unplugged?)";
+      return false;
+    }
+    if (streams[ready]->readFrame(&frame) != openni::STATUS_OK) continue;
+    const std::int64_t t = s.to_host(frame.getTimestamp());
+    if (ready == 1) {
+      auto& slot = s.depth_history[static_cast<size_t>(s.depth_count++ % kDepthHistory)];
+      slot.t_ns = t;
+      const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
+                        static_cast<size_t>(frame.getStrideInBytes()));
+      raw.convertTo(slot.depth_m, CV_32F, s.depth_m_per_unit);
+      continue;
+    }
+    const int index = frame.getFrameIndex();
+    if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
+    s.last_colour_index = index;
+    const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
+                      static_cast<size_t>(frame.getStrideInBytes()));
+    cv::cvtColor(rgb, out.gray, cv::COLOR_RGB2GRAY);
+    ++s.colour_frames_read;
+    have_colour = true;
+    colour_t = t;
+  }
+  out.t_colour_ns = colour_t;
+  out.status = Status::Ok;
+  out.problem.clear();
+  const Impl::DepthSlot* best = nullptr;
+  for (int k = 0; k < kept(); ++k) {
+    const auto& slot = s.depth_history[static_cast<size_t>(k)];
+    if (!best || std::llabs(slot.t_ns - colour_t) < std::llabs(best->t_ns - colour_t)) best = &slot;
+  }
+  if (!best || std::llabs(best->t_ns - colour_t) > kMaxColourDepthOffsetNs) {
+    out.t_depth_ns = colour_t;
+    out.status = Status::NoDepth;
+    out.problem = "no depth frame within 20 ms of the colour frame";
+    out.depth_m.release();
+    return true;
+  }
+  out.t_depth_ns = best->t_ns;
+  best->depth_m.copyTo(out.depth_m);
+  return true;
+}
+
+}  // namespace rgbdo
