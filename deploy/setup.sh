@@ -6,7 +6,8 @@
 #   deploy/setup.sh test    build for x86-64 and armhf (Odroid-XU3), run the whole test suite
 #                           natively, on armhf under qemu, and natively again under
 #                           AddressSanitizer + UndefinedBehaviorSanitizer
-#   deploy/setup.sh bench   build, then run the Google Benchmark programs
+#   deploy/setup.sh bench   build, then run the Google Benchmark programs and the ARM cost
+#                           model (the armhf build's instructions per frame, per stage)
 #   deploy/setup.sh deps    only install the dependencies
 #
 # Idempotent: re-running it re-uses the build directories under build/.
@@ -21,8 +22,10 @@ packages=(
   libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
-# The armhf cross build, its sysroot and emulator, and systemd-analyze for the package test.
-cross_packages=(g++-arm-linux-gnueabihf mmdebstrap qemu-user-static systemd)
+# The armhf cross build, its sysroot and emulators (qemu-user-static runs the armhf tests;
+# qemu-user's dynamic qemu-arm loads the ARM cost model's plugin), and systemd-analyze for the
+# package test.
+cross_packages=(g++-arm-linux-gnueabihf mmdebstrap qemu-user-static qemu-user systemd)
 
 log() { printf '\n== %s\n' "$*"; }
 
@@ -94,9 +97,15 @@ run_tests() {
 }
 
 run_benchmarks() {
-  build build/release -DCMAKE_BUILD_TYPE=Release
+  deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
+  build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
+  build build/release -DCMAKE_BUILD_TYPE=Release -DRGBDO_ARMHF_BUILD_DIR="$repo/build/armhf" \
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
   log "benchmarks (one thread, PNG decoding excluded)"
   for b in build/release/bench/bench_*; do "$b" --benchmark_counters_tabular=true; done
+  log "ARM cost model: the armhf build under qemu-arm, instructions per frame by stage"
+  (cd build/release && ctest -R arm_cost_within_budget -V | sed -n 's/^[0-9]*: //p')
 }
 
 job=${1:-}
@@ -104,6 +113,6 @@ case "$job" in
   deps) install_dependencies "${packages[@]}" "${cross_packages[@]}" ;;
   demo) install_dependencies "${packages[@]}"; run_demo ;;
   test) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_tests ;;
-  bench) install_dependencies "${packages[@]}"; run_benchmarks ;;
+  bench) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_benchmarks ;;
   *) echo "usage: deploy/setup.sh demo|test|bench|deps" >&2; exit 2 ;;
 esac

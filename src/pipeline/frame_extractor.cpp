@@ -2,6 +2,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/pipeline/mask.hpp"
 
 namespace rgbdo {
@@ -24,12 +25,16 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
     out.status = Status::BadFrame;
     return;
   }
+  const CostStagesEnd stages_end;
+  mark_cost_stage(CostStage::Mask);
   build_feature_mask(frame.depth_m, depth_, border_px_, mask_);
   if (cv::countNonZero(mask_) == 0) {
     out.status = Status::NoDepth;
     return;
   }
+  mark_cost_stage(CostStage::Detect);
   detector_.detect(frame.gray, mask_, out.features);
+  mark_cost_stage(CostStage::Geometry);
   backprojector_.compute(out.features.keypoints, frame.depth_m, out.geometry);
   if (static_cast<int>(out.features.keypoints.size()) < min_features_) out.status = Status::TooFewFeatures;
 }

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "rgbd_odometry/core/clock.hpp"
+#include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/core/noise_model.hpp"
 #include "rgbd_odometry/core/splitmix64.hpp"
 
@@ -56,6 +57,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (prev.status != Status::Ok) return fail(prev.status);
   const double dt_s = static_cast<double>(r.t_curr_ns - r.t_prev_ns) * 1e-9;
 
+  const CostStagesEnd stages_end;
+  mark_cost_stage(CostStage::Match);
   auto t0 = Clock::now();
   matcher_.match(prev.features.descriptors, curr.features.descriptors, matches_);
   r.matches = static_cast<int>(matches_.size());
@@ -65,6 +68,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const bool compensate = config_.depth.compensate_timing && dt_s > 0;
   // Before this pair is solved, the previous pair's velocity is the best guess (zero after a gap).
   const MotionPrior prior = last_motion_.value_or(MotionPrior{});
+  mark_cost_stage(CostStage::PointPairs);
   t0 = Clock::now();
   build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, compensate ? &prior : nullptr,
                     pairs_);
@@ -75,6 +79,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   // Separate streams: the covariance's noise must not depend on how many draws RANSAC used.
   Rng ransac_rng(mix(config_.seed, 2 * pair_index));
   Rng covariance_rng(mix(config_.seed, 2 * pair_index + 1));
+  mark_cost_stage(CostStage::Ransac);
   t0 = Clock::now();
   ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_);
   r.times.ransac_ms = ms_since(t0);
@@ -83,10 +88,12 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (compensate) {
     // Second pass: carry the depths to colour time with this pair's own velocity, which is
     // better than the previous pair's whenever the depth frames are far enough apart.
+    mark_cost_stage(CostStage::PointPairs);
     t0 = Clock::now();
     const MotionPrior own = motion_from(fit_.T_prev_curr, dt_s);
     build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, &own, pairs_);
     r.times.backproject_ms += ms_since(t0);
+    mark_cost_stage(CostStage::Ransac);
     t0 = Clock::now();
     ransac_.refine(pairs_.prev, pairs_.curr, fit_.T_prev_curr, refined_);
     r.times.ransac_ms += ms_since(t0);
@@ -96,6 +103,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
     }
   }
 
+  mark_cost_stage(CostStage::Covariance);
   inlier_prev_.clear();
   inlier_curr_.clear();
   for (int k : fit_.inliers) {

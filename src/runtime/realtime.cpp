@@ -88,7 +88,7 @@ class Run {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     for (auto& t : threads) t.join();
-    stats_.skipped = mailbox_.skipped();
+    stats_.skipped = mailbox_.skipped() + static_cast<std::uint64_t>(feed_.replaced_frames());
     stats_.dropped_by_sensor = feed_.dropped_frames();
     return stats_;
   }
@@ -246,7 +246,7 @@ class Run {
       if (feed_.live() && Clock::now() >= next_status) {
         std::ostringstream s;
         s << std::fixed << std::setprecision(1) << "status: " << (stats_.frames - frames_at_status) / 10.0
-          << " frames/s, " << mailbox_.skipped() << " skipped, " << feed_.dropped_frames()
+          << " frames/s, " << mailbox_.skipped() + static_cast<std::uint64_t>(feed_.replaced_frames()) << " skipped, " << feed_.dropped_frames()
           << " dropped by the sensor, latency median " << stats_.latency.quantile_ms(0.5) << " ms, p99 "
           << stats_.latency.quantile_ms(0.99) << " ms";
         on_message_(s.str());

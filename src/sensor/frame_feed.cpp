@@ -65,6 +65,7 @@ FeedState OpenNiFeed::next(RgbdFrame& frame, std::string& problem) {
   }
   std::lock_guard<std::mutex> lock(mutex_);
   dropped_before_ += source_->dropped_colour_frames();
+  replaced_before_ += source_->replaced_colour_frames();
   source_.reset();  // release the device: a replugged sensor must be opened afresh
   return FeedState::Lost;
 }
@@ -100,6 +101,11 @@ std::string OpenNiFeed::description() const {
 int OpenNiFeed::dropped_frames() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return dropped_before_ + (source_ ? source_->dropped_colour_frames() : 0);
+}
+
+int OpenNiFeed::replaced_frames() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return replaced_before_ + (source_ ? source_->replaced_colour_frames() : 0);
 }
 
 std::unique_ptr<FrameFeed> open_frame_feed(const std::string& source, const Config& config, int max_frames) {

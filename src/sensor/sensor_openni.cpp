@@ -69,7 +69,9 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   std::array<DepthSlot, kDepthHistory> depth_history;
   int depth_count = 0;
   int last_colour_index = -1;
-  int dropped = 0;
+  // Read by other threads (the status line) while the capture thread counts: atomic.
+  std::atomic<int> dropped{0};   // colour frame indices the sensor skipped
+  std::atomic<int> replaced{0};  // colour frames replaced by a newer one while waiting for depth
   // A recording played by OniFile at "manual" speed: it reads the next frame of the file each
   // time a wait finds no frame ready ("pokes" the device). Its frames must be waited for in one
   // wait each: a second poke while the player is still decoding makes it deliver two frames,
@@ -174,6 +176,8 @@ OpenNiSource::~OpenNiSource() {
 
 int OpenNiSource::dropped_colour_frames() const { return impl_->dropped; }
 
+int OpenNiSource::replaced_colour_frames() const { return impl_->replaced; }
+
 void OpenNiSource::interrupt() { impl_->interrupted = true; }
 
 std::string OpenNiSource::description() const {
@@ -250,6 +254,9 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
       raw.convertTo(slot.depth_m, CV_32F, s.depth_m_per_unit);
       continue;
     }
+    // A colour frame in hand that is still waiting for its depth is replaced by this newer
+    // one: the reader fell behind. Counted, so that no frame goes unseen.
+    if (have_colour) ++s.replaced;
     const int index = frame.getFrameIndex();
     if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
     s.last_colour_index = index;

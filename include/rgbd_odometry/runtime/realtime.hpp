@@ -35,7 +35,7 @@ struct PairOutput {
 
 struct RealtimeStats {
   std::uint64_t frames = 0;    // processed
-  std::uint64_t skipped = 0;   // replaced before processing could take them
+  std::uint64_t skipped = 0;   // replaced by a newer frame before the reader or processing could take them
   std::uint64_t pairs = 0;
   int sensor_losses = 0, reopens = 0;
   int dropped_by_sensor = 0;   // from the sensor's frame indices

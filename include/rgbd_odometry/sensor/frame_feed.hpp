@@ -36,6 +36,10 @@ class FrameFeed {
   virtual const GroundTruth* groundtruth() const { return nullptr; }
   virtual std::string description() const = 0;
   virtual int dropped_frames() const { return 0; }  // by the sensor, seen from frame indices
+  // Live frames the reader replaced by a newer one before it could deliver them (it fell
+  // behind, e.g. while waiting for a frame's depth): skipped, like frames the processing
+  // threads could not take. Thread-safe, as dropped_frames().
+  virtual int replaced_frames() const { return 0; }
 };
 
 class TumFeed : public FrameFeed {
@@ -66,10 +70,11 @@ class OpenNiFeed : public FrameFeed {
   void interrupt() override;
   std::string description() const override;
   int dropped_frames() const override;
+  int replaced_frames() const override;
 
  private:
   OpenNiOptions options_;
-  int max_frames_, delivered_ = 0, opens_ = 1, dropped_before_ = 0;
+  int max_frames_, delivered_ = 0, opens_ = 1, dropped_before_ = 0, replaced_before_ = 0;
   bool playback_;
   mutable std::mutex mutex_;  // guards source_ against interrupt() from another thread
   std::unique_ptr<OpenNiSource> source_;

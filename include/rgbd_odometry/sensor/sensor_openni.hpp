@@ -50,7 +50,8 @@ class OpenNiSource {
   // Makes a next() in progress (or the next one) return false promptly; thread-safe.
   void interrupt();
 
-  int dropped_colour_frames() const;
+  int dropped_colour_frames() const;   // indices the sensor skipped (thread-safe)
+  int replaced_colour_frames() const;  // replaced by a newer frame while waiting for depth (thread-safe)
   std::string description() const;  // device name, URI and the modes in use
 
  private:
