@@ -86,12 +86,22 @@ TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
 
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
   const std::vector<size_t> recorded = recorded_index_of(live, seq);
+  const std::vector<TumImage> depth_images = read_tum_images(RGBDO_TEST_DATA_DIR, "depth.txt");
   ASSERT_EQ(recorded.size(), live.size()) << "live frames whose intervals match no run of recorded frames";
   OdometryPipeline from_live(config), from_replay(config);
   size_t compared = 0;
   for (size_t i = 0; i < live.size(); ++i) {
-    // The same frames, pixel for pixel, in the same pairs: the same odometry.
-    const RgbdFrame replay = load_tum_frame(seq.frames[recorded[i]], config.depth.units_per_m, 640, 480);
+    // The same frames, pixel for pixel, in the same pairs: the same odometry. Each colour frame
+    // with the depth image the live reader paired it with (on a loaded machine that can be
+    // another than the recording's nearest: the reader pairs with what has arrived in time).
+    TumFrameRef ref = seq.frames[recorded[i]];
+    const std::int64_t depth_since_first = live[i].t_depth_ns - live.front().t_colour_ns;
+    for (const TumImage& d : depth_images)
+      if (std::llabs(d.t_ns - seq.frames[recorded.front()].t_colour_ns - depth_since_first) <= 2000) {
+        ref.t_depth_ns = d.t_ns;
+        ref.depth_path = d.path;
+      }
+    const RgbdFrame replay = load_tum_frame(ref, config.depth.units_per_m, 640, 480);
     const auto a = from_live.process(live[i]);
     const auto b = from_replay.process(replay);
     ASSERT_EQ(a.has_value(), b.has_value());

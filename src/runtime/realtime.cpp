@@ -193,6 +193,7 @@ class Run {
     const ProcessedSlot& curr = slots_[static_cast<size_t>(curr_index)];
     PairOutput out;
     out.t_frame_ns = curr.frame.times.t_colour_ns;
+    out.t_depth_ns = curr.frame.times.t_depth_ns;
     out.t_capture_host_ns = curr.t_capture_host_ns;
     out.skipped = curr.skipped_before;
     out.frame_problem = curr.frame.problem;
