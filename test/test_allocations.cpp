@@ -19,6 +19,8 @@
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/pipeline/detect.hpp"
+#include "rgbd_odometry/pipeline/mask.hpp"
 
 extern "C" {
 void* __libc_malloc(size_t);
@@ -83,6 +85,32 @@ TEST(Allocations, CountingAllocatorSeesAllocations) {
   std::free(q);
   delete p;
   EXPECT_GE(c.allocations(), 3);
+}
+
+TEST(Allocations, OurExtractorAllocatesNothingAfterWarmUp) {
+  // GRID_ORB sizes its pyramid, candidate and descriptor buffers once; OpenCV's ORB allocates
+  // ~300 times per frame (printed by the test below).
+  Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  config.features.detector = config.features.descriptor = "GRID_ORB";
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  std::vector<RgbdFrame> frames;
+  for (const auto& ref : seq.frames) frames.push_back(load_tum_frame(ref, config.depth.units_per_m, 640, 480));
+  FeatureDetector detector(config.features);
+  std::vector<cv::Mat> masks(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i)
+    build_feature_mask(frames[i].depth_m, config.depth, config.features.border_px, masks[i]);
+  Features a, b;  // two frames' worth, as the pipeline keeps them
+  long allocations = 0;
+  size_t keypoints = 0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    Features& out = i % 2 ? a : b;
+    const Counter c;
+    detector.detect(frames[i].gray, masks[i], out);
+    if (i >= 2) allocations += c.allocations();
+    keypoints += out.keypoints.size();
+  }
+  EXPECT_EQ(allocations, 0) << "GRID_ORB allocated after the first two frames";
+  EXPECT_EQ(keypoints, frames.size() * static_cast<size_t>(config.features.max_features));
 }
 
 TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {

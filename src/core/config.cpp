@@ -221,6 +221,8 @@ void validate(const Config& config) {
   if (!listed(kFeatureDescriptors, c.features.descriptor))
     throw ConfigError("config key 'features.descriptor': unknown descriptor '" + c.features.descriptor + "' (" +
                       joined(kFeatureDescriptors) + ")");
+  if ((c.features.descriptor == kGridOrb) != (c.features.detector == kGridOrb))
+    throw ConfigError("config key 'features.descriptor': GRID_ORB is a detector and descriptor in one: set both");
   if ((c.features.descriptor == "AKAZE") != (c.features.detector == "AKAZE") ||
       (c.features.descriptor == "KAZE") != (c.features.detector == "KAZE"))
     throw ConfigError("config key 'features.descriptor': " + c.features.descriptor +

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "rgbd_odometry/pipeline/grid_orb.hpp"
+
 namespace rgbdo {
 namespace {
 
@@ -22,13 +24,24 @@ cv::Ptr<cv::Feature2D> create_feature2d(const std::string& name, const FeatureCo
 
 }  // namespace
 
-FeatureDetector::FeatureDetector(const FeatureConfig& config) {
+FeatureDetector::FeatureDetector(const FeatureConfig& config) : config_(config) {
+  if (config.detector == kGridOrb) return;  // its own descriptors (validate() insists)
   detector_ = create_feature2d(config.detector, config);
   descriptor_ = config.descriptor == config.detector ? detector_ : create_feature2d(config.descriptor, config);
   binary_ = descriptor_->defaultNorm() == cv::NORM_HAMMING;
 }
 
+FeatureDetector::~FeatureDetector() = default;
+FeatureDetector::FeatureDetector(FeatureDetector&&) noexcept = default;
+FeatureDetector& FeatureDetector::operator=(FeatureDetector&&) noexcept = default;
+
 void FeatureDetector::detect(const cv::Mat& gray, const cv::Mat& mask, Features& out) {
+  if (config_.detector == kGridOrb) {
+    if (!grid_orb_ || !grid_orb_->sized_for(gray.cols, gray.rows))
+      grid_orb_ = std::make_unique<GridOrbExtractor>(config_, gray.cols, gray.rows);
+    grid_orb_->detect(gray, mask, out);
+    return;
+  }
   out.keypoints.clear();
   if (detector_ == descriptor_) {
     detector_->detectAndCompute(gray, mask, out.keypoints, out.descriptors);

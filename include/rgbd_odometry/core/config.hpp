@@ -32,10 +32,12 @@ struct DepthConfig {
   bool compensate_timing = true;
 };
 
-// The OpenCV Feature2D algorithms features.detector and features.descriptor may name.
-inline constexpr std::array<std::string_view, 8> kFeatureDetectors{"ORB",  "AKAZE", "BRISK", "SIFT",
-                                                                   "KAZE", "FAST",  "GFTT",  "AGAST"};
-inline constexpr std::array<std::string_view, 5> kFeatureDescriptors{"ORB", "AKAZE", "BRISK", "SIFT", "KAZE"};
+// What features.detector and features.descriptor may name: the project's own extractor
+// (pipeline/grid_orb.hpp, detector and descriptor together) and OpenCV's Feature2D algorithms.
+inline constexpr std::string_view kGridOrb = "GRID_ORB";
+inline constexpr std::array<std::string_view, 9> kFeatureDetectors{"GRID_ORB", "ORB",  "AKAZE", "BRISK", "SIFT",
+                                                                   "KAZE",     "FAST", "GFTT",  "AGAST"};
+inline constexpr std::array<std::string_view, 6> kFeatureDescriptors{"GRID_ORB", "ORB", "AKAZE", "BRISK", "SIFT", "KAZE"};
 
 struct FeatureConfig {
   std::string detector = "ORB";

@@ -8,6 +8,7 @@
 #include <span>
 #include <string>
 
+#include "rgbd_odometry/simd/fast.hpp"
 #include "rgbd_odometry/simd/nearest_two.hpp"
 #include "rgbd_odometry/simd/perturb.hpp"
 #include "rgbd_odometry/simd/score.hpp"
@@ -22,11 +23,14 @@ using PerturbationSumsFn = void (*)(const PerturbationInput& in, const Perturbat
 
 using ScoreRigidFn = void (*)(const RigidScoreInput& in, int& count, float& cost);
 
+using Fast9RowFn = void (*)(const std::uint8_t* row, std::ptrdiff_t stride, int n, int threshold, std::uint8_t* flags);
+
 struct KernelSet {
   const char* name;  // "scalar", "neon", "avx2", ...
   NearestTwoHammingFn nearest_two_hamming;
   PerturbationSumsFn perturbation_sums;
   ScoreRigidFn score_rigid;
+  Fast9RowFn fast9_row;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.

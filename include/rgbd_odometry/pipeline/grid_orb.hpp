@@ -1,0 +1,93 @@
+#pragma once
+// Stage 1b, our own: ORB-class keypoints and 256-bit steered binary descriptors, spread over
+// the image, with no heap allocation per frame after the first (features.detector: GRID_ORB).
+// OpenCV's ORB on the Odroid runs Debian's armhf build, which has no NEON (README "ARM cost
+// model"); this extractor's hot loops are ours, so they can be.
+//
+//   pyramid       levels 1.. downscaled from the previous level by scale_factor, bilinear in
+//                 fixed point (weights in 1/256), pixel centres aligned
+//   FAST-9        segment test on each level at fast_threshold; a grid cell that finds no
+//                 corner at it looks again at kFastLowThreshold (ORB-SLAM's fallback), so a
+//                 textureless cell still yields its best corner. Score: the summed excess of
+//                 the circle's differences over the threshold; 3x3 non-maximum suppression
+//   spread        each level's budget (ORB-SLAM's geometric split of max_features) goes first
+//                 to the best corner of each grid cell, then to the best of the rest
+//   orientation   intensity centroid over a disc of radius 15 (Rublee et al. 2011)
+//   descriptor    256 intensity comparisons of 5x5 box means (integral image, as the ORB
+//                 paper's sub-windows) at point pairs steered by the orientation in 30 steps
+//                 of 12 degrees; the pairs: a fixed Gaussian pattern (BRIEF G II, sigma 31/5,
+//                 within radius 13) drawn once from the project's RNG (grid_orb.cpp)
+//
+// Keypoints come out in level-0 pixel coordinates (pixel centres aligned across levels),
+// `octave` the level, `size` 31 pixels at that level's scale, `angle` in degrees,
+// `response` the FAST score.
+#include <array>
+#include <cstdint>
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/features.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
+
+namespace rgbdo {
+
+class GridOrbExtractor {
+ public:
+  // Sizes every buffer for width x height frames and the configuration's levels and budget.
+  GridOrbExtractor(const FeatureConfig& config, int width, int height);
+
+  // Detects inside mask (CV_8UC1, 255 = allowed, gray's size) and describes; out is
+  // overwritten, reusing its buffers.
+  void detect(const cv::Mat& gray, const cv::Mat& mask, Features& out);
+  bool sized_for(int width, int height) const { return width == width_ && height == height_; }
+
+  static constexpr int kFastLowThreshold = 7;
+  static constexpr int kBorder = 16;  // orientation disc (15) and descriptor support (13 + 2), from each level's edge
+  static constexpr int kAngleSteps = 30;
+  static constexpr int kDescriptorBits = 256;
+
+  struct PointPair {
+    std::int8_t x1, y1, x2, y2;
+  };
+  // The descriptor's comparisons at angle 0 (for tests and documentation).
+  static const std::array<PointPair, kDescriptorBits>& pattern();
+
+ private:
+  struct Level {
+    cv::Mat image;                   // CV_8UC1
+    std::vector<std::uint32_t> integral;  // (w + 1) x (h + 1), row-major
+    double scale = 1;                // level-0 pixels per level pixel
+    int budget = 0;                  // keypoints wanted from this level
+    int cell_px = 32;                // grid cell edge in level pixels
+    // Downscaling tables from the previous level: source index and weight (of the next
+    // pixel, in 1/256) per output column and row.
+    std::vector<int> x0, y0;
+    std::vector<std::uint16_t> wx, wy;
+  };
+  struct Candidate {
+    int x, y;       // level pixels
+    int score;      // FAST score at the threshold the cell used
+    bool strong;    // a corner at fast_threshold (not only at the low fallback)
+  };
+
+  void build_pyramid(const cv::Mat& gray);
+  void detect_level(int level, const cv::Mat& mask);
+  void select_level(int level, Features& out);
+  float orientation(const Level& level, int x, int y) const;
+  void describe(const Level& level, int x, int y, float angle_deg, std::uint8_t* out) const;
+
+  FeatureConfig config_;
+  int width_, height_;
+  std::vector<Level> levels_;
+  simd::Fast9RowFn fast9_row_;        // the active kernel set's, bound once
+  std::vector<std::uint16_t> score_;  // per pixel of the level being detected; 0 = no corner
+  std::vector<std::uint8_t> row_buffer_;  // one level-0 row: FAST flags, or a blended pyramid row
+  std::vector<Candidate> candidates_, chosen_;
+  std::vector<int> cell_best_;
+  std::array<std::array<PointPair, kDescriptorBits>, kAngleSteps> steered_;
+  std::array<int, 16> circle_offset_{};  // FAST circle (radius 3), set per level stride
+  std::vector<int> disc_half_width_;     // orientation disc: half width of each row, radius 15
+};
+
+}  // namespace rgbdo

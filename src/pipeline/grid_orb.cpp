@@ -1,0 +1,407 @@
+#include "rgbd_odometry/pipeline/grid_orb.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "rgbd_odometry/core/rng.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
+
+// Everything that decides a keypoint or a descriptor bit is integer arithmetic (or tables made
+// once from IEEE basic operations), so that the x86-64 and the armhf builds choose the same
+// keypoints and bits: libm's last bits differ between them (README "ARM target").
+namespace rgbdo {
+namespace {
+
+constexpr int kOrientationRadius = 15;
+constexpr int kPatternRadius = 13;
+constexpr int kBoxHalf = 2;  // 5x5 box means
+constexpr int kMinCellPx = 12, kMaxCellPx = 64;
+constexpr std::uint64_t kPatternSeed = 0x4752494430524231ULL;  // "GRID0RB1": the pattern is fixed by it
+
+// A standard normal draw in integers (Irwin-Hall: 12 uniforms of 1/1024 steps, variance
+// 1024^2 up to 0.0001 %), so that the pattern is the same on every architecture.
+int gaussian_1024(Rng& rng) {
+  int sum = 0;
+  for (int i = 0; i < 12; ++i) sum += static_cast<int>(rng.below(1024));
+  return sum - 12 * 1023 / 2;
+}
+
+std::array<GridOrbExtractor::PointPair, GridOrbExtractor::kDescriptorBits> make_pattern() {
+  // BRIEF's G II sampling (Calonder et al. 2010): both points of a test i.i.d. Gaussian about
+  // the centre with sigma = S / 5 for an S = 31 patch; kept within the disc that every
+  // rotation maps onto itself.
+  Rng rng(kPatternSeed);
+  const auto draw = [&](std::int8_t& x, std::int8_t& y) {
+    for (;;) {
+      // sigma 31/5 = 6.2: x = round(g * 6.2 / 1024) with g ~ N(0, 1024^2), in integers
+      const int gx = gaussian_1024(rng), gy = gaussian_1024(rng);
+      const int dx = (gx * 62 + (gx >= 0 ? 5120 : -5120)) / 10240;
+      const int dy = (gy * 62 + (gy >= 0 ? 5120 : -5120)) / 10240;
+      if (dx * dx + dy * dy <= kPatternRadius * kPatternRadius) {
+        x = static_cast<std::int8_t>(dx);
+        y = static_cast<std::int8_t>(dy);
+        return;
+      }
+    }
+  };
+  std::array<GridOrbExtractor::PointPair, GridOrbExtractor::kDescriptorBits> pattern{};
+  for (auto& p : pattern) {
+    do {
+      draw(p.x1, p.y1);
+      draw(p.x2, p.y2);
+    } while (p.x1 == p.x2 && p.y1 == p.y2);
+  }
+  return pattern;
+}
+
+// Unit vectors of the orientation steps in 1/65536 (no value lies near a rounding tie).
+struct Direction {
+  std::int64_t c, s;
+};
+const std::array<Direction, GridOrbExtractor::kAngleSteps>& directions() {
+  static const auto table = [] {
+    std::array<Direction, GridOrbExtractor::kAngleSteps> d{};
+    for (int k = 0; k < GridOrbExtractor::kAngleSteps; ++k) {
+      const double a = 2.0 * M_PI * k / GridOrbExtractor::kAngleSteps;
+      d[static_cast<size_t>(k)] = {std::llround(std::cos(a) * 65536.0), std::llround(std::sin(a) * 65536.0)};
+    }
+    return d;
+  }();
+  return table;
+}
+
+// Rounds a / 65536 to the nearest integer, halves away from zero (exact integer arithmetic).
+inline int round_q16(std::int64_t a) { return static_cast<int>(a >= 0 ? (a + 32768) >> 16 : -((-a + 32768) >> 16)); }
+
+// Candidate order: corners at the full threshold first, then by score, then top to bottom,
+// left to right: a total order, so every build picks the same keypoints.
+inline bool better(int a_strong, int a_score, int a_y, int a_x, int b_strong, int b_score, int b_y, int b_x) {
+  if (a_strong != b_strong) return a_strong > b_strong;
+  if (a_score != b_score) return a_score > b_score;
+  if (a_y != b_y) return a_y < b_y;
+  return a_x < b_x;
+}
+
+}  // namespace
+
+const std::array<GridOrbExtractor::PointPair, GridOrbExtractor::kDescriptorBits>& GridOrbExtractor::pattern() {
+  static const auto p = make_pattern();
+  return p;
+}
+
+GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int height)
+    : config_(config), width_(width), height_(height), fast9_row_(simd::active_kernels().fast9_row) {
+  const int n_levels = config.orb_levels;
+  const double factor = 1.0 / config.orb_scale_factor;
+  levels_.resize(static_cast<size_t>(n_levels));
+  // ORB-SLAM's split of the budget: geometric in the inverse scale factor, level 0 most.
+  double per_level = config.max_features * (1 - factor) / (1 - std::pow(factor, n_levels));
+  int assigned = 0;
+  double scale = 1;
+  for (int l = 0; l < n_levels; ++l) {
+    Level& L = levels_[static_cast<size_t>(l)];
+    L.scale = scale;
+    const int w = l == 0 ? width : static_cast<int>(std::lround(width / scale));
+    const int h = l == 0 ? height : static_cast<int>(std::lround(height / scale));
+    L.image.create(h, w, CV_8UC1);
+    L.integral.assign(static_cast<size_t>(w + 1) * static_cast<size_t>(h + 1), 0);
+    L.budget = l == n_levels - 1 ? std::max(config.max_features - assigned, 0) : static_cast<int>(std::lround(per_level));
+    assigned += L.budget;
+    per_level *= factor;
+    const int usable = std::max(w - 2 * kBorder, 1) * std::max(h - 2 * kBorder, 1);
+    L.cell_px = std::clamp(static_cast<int>(std::sqrt(usable / std::max(L.budget, 1))), kMinCellPx, kMaxCellPx);
+    if (l > 0) {
+      // Source position of each output pixel centre in the previous level, pixel centres aligned.
+      const Level& src = levels_[static_cast<size_t>(l - 1)];
+      const double step = config.orb_scale_factor;
+      const auto table = [&](int n_out, int n_src, std::vector<int>& i0, std::vector<std::uint16_t>& wt) {
+        i0.resize(static_cast<size_t>(n_out));
+        wt.resize(static_cast<size_t>(n_out));
+        for (int o = 0; o < n_out; ++o) {
+          const double s = (o + 0.5) * step - 0.5;
+          int i = static_cast<int>(std::floor(s));
+          int w8 = static_cast<int>(std::lround((s - i) * 256));
+          if (i < 0) i = 0, w8 = 0;
+          if (i >= n_src - 1) i = n_src - 2, w8 = 256;
+          i0[static_cast<size_t>(o)] = i;
+          wt[static_cast<size_t>(o)] = static_cast<std::uint16_t>(w8);
+        }
+      };
+      table(w, src.image.cols, L.x0, L.wx);
+      table(h, src.image.rows, L.y0, L.wy);
+    }
+    scale *= config.orb_scale_factor;
+  }
+  score_.assign(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
+  row_buffer_.assign(static_cast<size_t>(width), 0);
+  // Bounds fixed here, so detection never allocates: corners before suppression at most one
+  // pixel in four of level 0 (a real image has a few per cent; only noise reaches it, and the
+  // scan then stops), cells as many as the smallest cell makes.
+  candidates_.reserve(static_cast<size_t>(width) * static_cast<size_t>(height) / 4);
+  const size_t max_cells = static_cast<size_t>(width / kMinCellPx + 1) * static_cast<size_t>(height / kMinCellPx + 1);
+  cell_best_.reserve(max_cells);
+  chosen_.reserve(max_cells + static_cast<size_t>(config.max_features));
+  // The orientation disc: half width of each row.
+  for (int dy = -kOrientationRadius; dy <= kOrientationRadius; ++dy)
+    disc_half_width_.push_back(
+        static_cast<int>(std::floor(std::sqrt(static_cast<double>(kOrientationRadius * kOrientationRadius - dy * dy)))));
+  // The pattern steered to every orientation step, rounded in integers.
+  const auto& base = pattern();
+  for (int k = 0; k < kAngleSteps; ++k) {
+    const Direction d = directions()[static_cast<size_t>(k)];
+    for (int i = 0; i < kDescriptorBits; ++i) {
+      const PointPair& p = base[static_cast<size_t>(i)];
+      PointPair& r = steered_[static_cast<size_t>(k)][static_cast<size_t>(i)];
+      r.x1 = static_cast<std::int8_t>(round_q16(d.c * p.x1 - d.s * p.y1));
+      r.y1 = static_cast<std::int8_t>(round_q16(d.s * p.x1 + d.c * p.y1));
+      r.x2 = static_cast<std::int8_t>(round_q16(d.c * p.x2 - d.s * p.y2));
+      r.y2 = static_cast<std::int8_t>(round_q16(d.s * p.x2 + d.c * p.y2));
+    }
+  }
+}
+
+void GridOrbExtractor::build_pyramid(const cv::Mat& gray) {
+  gray.copyTo(levels_[0].image);  // same size every frame: no allocation
+  for (size_t l = 1; l < levels_.size(); ++l) {
+    const Level& src = levels_[l - 1];
+    Level& dst = levels_[l];
+    std::uint8_t* blended = row_buffer_.data();
+    for (int y = 0; y < dst.image.rows; ++y) {
+      // Vertically first, along whole source rows (contiguous: the compiler vectorises it),
+      // then horizontally through the column table. Each pass rounds to 8 bits.
+      const int y0 = dst.y0[static_cast<size_t>(y)];
+      const unsigned wy = dst.wy[static_cast<size_t>(y)];
+      const std::uint8_t* r0 = src.image.ptr<std::uint8_t>(y0);
+      const std::uint8_t* r1 = src.image.ptr<std::uint8_t>(std::min(y0 + 1, src.image.rows - 1));
+      for (int x = 0; x < src.image.cols; ++x)
+        blended[x] = static_cast<std::uint8_t>((r0[x] * (256 - wy) + r1[x] * wy + 128) >> 8);
+      std::uint8_t* out = dst.image.ptr<std::uint8_t>(y);
+      for (int x = 0; x < dst.image.cols; ++x) {
+        const int x0 = dst.x0[static_cast<size_t>(x)];
+        const unsigned wx = dst.wx[static_cast<size_t>(x)];
+        out[x] = static_cast<std::uint8_t>((blended[x0] * (256 - wx) + blended[x0 + 1] * wx + 128) >> 8);
+      }
+    }
+  }
+  for (Level& L : levels_) {
+    const int w = L.image.cols, h = L.image.rows;
+    const size_t stride = static_cast<size_t>(w) + 1;
+    std::uint32_t* I = L.integral.data();
+    for (int y = 0; y < h; ++y) {
+      const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
+      std::uint32_t running = 0;
+      std::uint32_t* above = I + static_cast<size_t>(y) * stride;
+      std::uint32_t* here = above + stride;
+      for (int x = 0; x < w; ++x) {
+        running += row[x];
+        here[x + 1] = above[x + 1] + running;
+      }
+    }
+  }
+}
+
+void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
+  const Level& L = levels_[static_cast<size_t>(level)];
+  const int w = L.image.cols, h = L.image.rows;
+  const auto stride = static_cast<int>(L.image.step);
+  for (int k = 0; k < 16; ++k) circle_offset_[static_cast<size_t>(k)] = simd::kFastCircle[k][1] * stride + simd::kFastCircle[k][0];
+  const int cells_x = (w - 2 * kBorder + L.cell_px - 1) / L.cell_px;
+  const int cells_y = (h - 2 * kBorder + L.cell_px - 1) / L.cell_px;
+  cell_best_.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), -1);
+  candidates_.clear();
+
+  // The segment test at threshold t over [x_begin, x_end) x [y_begin, y_end) (the active SIMD
+  // kernel flags the corners), then each corner's mask and score; appends the corners.
+  const auto segment_test = [&](int t, int x_begin, int x_end, int y_begin, int y_end, bool strong) {
+    std::uint8_t* flags = row_buffer_.data();
+    for (int y = y_begin; y < y_end; ++y) {
+      const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
+      fast9_row_(row + x_begin, stride, x_end - x_begin, t, flags);
+      for (int i = 0; i < x_end - x_begin; ++i) {
+        if (flags[i] == 0) continue;
+        const int x = x_begin + i;
+        // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
+        const int mx = std::min(static_cast<int>((x + 0.5) * L.scale), mask.cols - 1);
+        const int my = std::min(static_cast<int>((y + 0.5) * L.scale), mask.rows - 1);
+        if (mask.at<std::uint8_t>(my, mx) == 0) continue;
+        // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score).
+        const std::uint8_t* p = row + x;
+        const int hi = *p + t, lo = *p - t;
+        int excess_bright = 0, excess_dark = 0;
+        for (int k = 0; k < 16; ++k) {
+          const int v = p[circle_offset_[static_cast<size_t>(k)]];
+          excess_bright += std::max(v - hi, 0);
+          excess_dark += std::max(lo - v, 0);
+        }
+        const int score = std::max((flags[i] & 1) ? excess_bright : 0, (flags[i] & 2) ? excess_dark : 0) + 1;
+        // Bounded (sized at construction: no allocation); only noise fills it.
+        if (candidates_.size() == candidates_.capacity()) return;
+        candidates_.push_back({x, y, score, strong});
+      }
+    }
+  };
+  // Whether a cell of this level sees any of the mask (sampled every 4 level pixels): a cell
+  // wholly outside it (no depth, or the periphery) is not searched again at the low threshold.
+  const auto cell_in_mask = [&](int xb, int xe, int yb, int ye) {
+    for (int y = yb; y < ye; y += 4)
+      for (int x = xb; x < xe; x += 4) {
+        const int mx = std::min(static_cast<int>((x + 0.5) * L.scale), mask.cols - 1);
+        const int my = std::min(static_cast<int>((y + 0.5) * L.scale), mask.rows - 1);
+        if (mask.at<std::uint8_t>(my, mx) != 0) return true;
+      }
+    return false;
+  };
+
+  const int x_begin = kBorder, x_end = w - kBorder, y_begin = kBorder, y_end = h - kBorder;
+  if (x_end <= x_begin || y_end <= y_begin) return;
+  segment_test(config_.fast_threshold, x_begin, x_end, y_begin, y_end, true);
+  // Cells without a corner at the full threshold look again at the low one.
+  std::vector<int>& has = cell_best_;  // reused as "cell has a strong corner" (1) here
+  for (const Candidate& c : candidates_)
+    has[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)] = 1;
+  for (int cy = 0; cy < cells_y; ++cy)
+    for (int cx = 0; cx < cells_x; ++cx) {
+      if (has[static_cast<size_t>(cy * cells_x + cx)] == 1) continue;
+      const int xb = x_begin + cx * L.cell_px, yb = y_begin + cy * L.cell_px;
+      const int xe = std::min(xb + L.cell_px, x_end), ye = std::min(yb + L.cell_px, y_end);
+      if (cell_in_mask(xb, xe, yb, ye)) segment_test(kFastLowThreshold, xb, xe, yb, ye, false);
+    }
+
+  // 3x3 non-maximum suppression on the score image (strict against earlier pixels, so that of
+  // two equal neighbours exactly one survives).
+  for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = static_cast<std::uint16_t>(c.score);
+  size_t kept = 0;
+  for (size_t i = 0; i < candidates_.size(); ++i) {
+    const Candidate c = candidates_[i];
+    const std::uint16_t* s = score_.data() + c.y * w + c.x;
+    const int v = *s;
+    const bool is_max = v >= s[-w - 1] && v >= s[-w] && v >= s[-w + 1] && v >= s[-1] && v > s[1] && v > s[w - 1] &&
+                        v > s[w] && v > s[w + 1];
+    if (is_max) candidates_[kept++] = c;
+  }
+  for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = 0;  // clean for the next level
+  candidates_.resize(kept);
+}
+
+void GridOrbExtractor::select_level(int level, Features& out) {
+  const Level& L = levels_[static_cast<size_t>(level)];
+  const int w = L.image.cols, h = L.image.rows;
+  const int cells_x = (w - 2 * kBorder + L.cell_px - 1) / L.cell_px;
+  const int cells_y = (h - 2 * kBorder + L.cell_px - 1) / L.cell_px;
+  cell_best_.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), -1);
+  const auto cand_better = [](const Candidate& a, const Candidate& b) {
+    return better(a.strong, a.score, a.y, a.x, b.strong, b.score, b.y, b.x);
+  };
+  // The best corner of each cell first: keypoints spread over the image, not clumped on texture.
+  for (size_t i = 0; i < candidates_.size(); ++i) {
+    const Candidate& c = candidates_[i];
+    int& best = cell_best_[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)];
+    if (best < 0 || cand_better(c, candidates_[static_cast<size_t>(best)])) best = static_cast<int>(i);
+  }
+  chosen_.clear();
+  for (const int best : cell_best_)
+    if (best >= 0) {
+      chosen_.push_back(candidates_[static_cast<size_t>(best)]);
+      candidates_[static_cast<size_t>(best)].score = -1;  // taken
+    }
+  const auto budget = static_cast<size_t>(std::max(L.budget, 0));
+  if (chosen_.size() > budget) {
+    std::partial_sort(chosen_.begin(), chosen_.begin() + static_cast<std::ptrdiff_t>(budget), chosen_.end(), cand_better);
+    chosen_.resize(budget);
+  } else if (chosen_.size() < budget) {
+    // Then the best of the rest.
+    const auto taken_last = std::remove_if(candidates_.begin(), candidates_.end(), [](const Candidate& c) { return c.score < 0; });
+    candidates_.erase(taken_last, candidates_.end());
+    const size_t more = std::min(budget - chosen_.size(), candidates_.size());
+    std::partial_sort(candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(more), candidates_.end(),
+                      cand_better);
+    chosen_.insert(chosen_.end(), candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(more));
+  }
+  std::sort(chosen_.begin(), chosen_.end(), [](const Candidate& a, const Candidate& b) {
+    return a.y != b.y ? a.y < b.y : a.x < b.x;
+  });
+  const float size = static_cast<float>(31.0 * L.scale);
+  for (const Candidate& c : chosen_) {
+    const size_t row = out.keypoints.size();
+    const float angle = orientation(L, c.x, c.y);
+    cv::KeyPoint kp;
+    kp.pt = {static_cast<float>((c.x + 0.5) * L.scale - 0.5), static_cast<float>((c.y + 0.5) * L.scale - 0.5)};
+    kp.size = size;
+    kp.angle = angle;
+    kp.response = static_cast<float>(c.score);
+    kp.octave = level;
+    kp.class_id = -1;
+    out.keypoints.push_back(kp);
+    describe(L, c.x, c.y, angle, out.descriptor_storage.ptr<std::uint8_t>(static_cast<int>(row)));
+  }
+}
+
+float GridOrbExtractor::orientation(const Level& L, int x, int y) const {
+  // Intensity centroid: the direction from the keypoint to the disc's centre of brightness,
+  // snapped to the nearest of the 30 steps by integer dot products (no atan2: its last bits
+  // differ between builds).
+  std::int64_t m10 = 0, m01 = 0;
+  for (int dy = -kOrientationRadius; dy <= kOrientationRadius; ++dy) {
+    const std::uint8_t* row = L.image.ptr<std::uint8_t>(y + dy) + x;
+    const int hw = disc_half_width_[static_cast<size_t>(dy + kOrientationRadius)];
+    std::int64_t row_sum = 0, row_moment = 0;
+    for (int dx = -hw; dx <= hw; ++dx) {
+      row_sum += row[dx];
+      row_moment += dx * row[dx];
+    }
+    m10 += row_moment;
+    m01 += dy * row_sum;
+  }
+  int best = 0;
+  std::int64_t best_dot = std::numeric_limits<std::int64_t>::min();
+  for (int k = 0; k < kAngleSteps; ++k) {
+    const Direction d = directions()[static_cast<size_t>(k)];
+    const std::int64_t dot = m10 * d.c + m01 * d.s;
+    if (dot > best_dot) best_dot = dot, best = k;
+  }
+  return static_cast<float>(best * (360 / kAngleSteps));
+}
+
+void GridOrbExtractor::describe(const Level& L, int x, int y, float angle_deg, std::uint8_t* out) const {
+  const auto step = static_cast<size_t>(std::lround(angle_deg / (360.0f / kAngleSteps))) % kAngleSteps;
+  const auto& pairs = steered_[step];
+  const size_t stride = static_cast<size_t>(L.image.cols) + 1;
+  const std::uint32_t* I = L.integral.data();
+  // Sum of the 5x5 box centred on (x + dx, y + dy): four corners of the integral image.
+  const auto box = [&](int dx, int dy) {
+    const size_t top = static_cast<size_t>(y + dy - kBoxHalf) * stride, bottom = static_cast<size_t>(y + dy + kBoxHalf + 1) * stride;
+    const size_t left = static_cast<size_t>(x + dx - kBoxHalf), right = static_cast<size_t>(x + dx + kBoxHalf + 1);
+    return I[bottom + right] - I[top + right] - I[bottom + left] + I[top + left];
+  };
+  for (int byte = 0; byte < kDescriptorBits / 8; ++byte) {
+    std::uint8_t bits = 0;
+    for (int b = 0; b < 8; ++b) {
+      const PointPair& p = pairs[static_cast<size_t>(byte * 8 + b)];
+      bits |= static_cast<std::uint8_t>((box(p.x1, p.y1) < box(p.x2, p.y2)) << b);
+    }
+    out[byte] = bits;
+  }
+}
+
+void GridOrbExtractor::detect(const cv::Mat& gray, const cv::Mat& mask, Features& out) {
+  out.keypoints.clear();
+  if (out.descriptor_storage.rows < config_.max_features || out.descriptor_storage.cols != kDescriptorBits / 8)
+    out.descriptor_storage.create(config_.max_features, kDescriptorBits / 8, CV_8UC1);
+  build_pyramid(gray);
+  int carried = 0;  // budget a level could not use goes to the next
+  for (int l = 0; l < static_cast<int>(levels_.size()); ++l) {
+    Level& L = levels_[static_cast<size_t>(l)];
+    const int own = L.budget;
+    L.budget += carried;
+    detect_level(l, mask);
+    const size_t before = out.keypoints.size();
+    select_level(l, out);
+    carried = L.budget - static_cast<int>(out.keypoints.size() - before);
+    L.budget = own;
+  }
+  out.descriptors = out.descriptor_storage.rowRange(0, static_cast<int>(out.keypoints.size()));
+}
+
+}  // namespace rgbdo
