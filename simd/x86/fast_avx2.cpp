@@ -1,30 +1,13 @@
-// AVX2 twin of simd/scalar/fast_scalar.cpp: 32 pixels at a time. The 16 circle comparisons
-// become 16 byte-mask planes; 9 contiguous ones are found by the reference's doubling
-// (runs of 2, 4, 8, then 9) applied to planes instead of bits. A block whose compass points
-// (circle 0, 4, 8, 12) show no two adjacent ones on either side holds no corner and is
-// skipped: every arc of 9 covers two adjacent compass points.
+// AVX2 twin of simd/scalar/fast_scalar.cpp: 32 pixels at a time. A block whose compass points
+// (circle 0, 4, 8, 12) show no two adjacent hits on either side holds no corner and is
+// skipped (every arc of 9 covers two adjacent compass points); in the others each lane counts
+// its longest run of brighter and of darker circle pixels, a corner being a run of 9 (the same
+// booleans as the reference's bit test).
 #include <immintrin.h>
-
-#include <initializer_list>
 
 #include "rgbd_odometry/simd/fast.hpp"
 
 namespace rgbdo::simd {
-namespace {
-
-// The byte mask of pixels that have an arc of 9 among the 16 planes.
-__m256i arc_of_9(const __m256i p[16]) {
-  __m256i r2[16], r4[16];
-  for (int k = 0; k < 16; ++k) r2[k] = _mm256_and_si256(p[k], p[(k + 1) & 15]);
-  for (int k = 0; k < 16; ++k) r4[k] = _mm256_and_si256(r2[k], r2[(k + 2) & 15]);
-  __m256i any = _mm256_setzero_si256();
-  for (int k = 0; k < 16; ++k)
-    any = _mm256_or_si256(any, _mm256_and_si256(_mm256_and_si256(r4[k], r4[(k + 4) & 15]), p[(k + 8) & 15]));
-  return any;
-}
-
-}  // namespace
-
 void fast9_row_avx2(const std::uint8_t* row, std::ptrdiff_t stride, int n, int threshold, std::uint8_t* flags) {
   std::ptrdiff_t offset[16];
   for (int k = 0; k < 16; ++k) offset[k] = kFastCircle[k][1] * stride + kFastCircle[k][0];
@@ -40,10 +23,10 @@ void fast9_row_avx2(const std::uint8_t* row, std::ptrdiff_t stride, int n, int t
     // v > hi  <=>  v -sat hi != 0;  v < lo  <=>  lo -sat v != 0 (unsigned bytes).
     const auto brighter = [&](const __m256i v) { return _mm256_xor_si256(_mm256_cmpeq_epi8(_mm256_subs_epu8(v, hi), zero), _mm256_set1_epi8(-1)); };
     const auto darker = [&](const __m256i v) { return _mm256_xor_si256(_mm256_cmpeq_epi8(_mm256_subs_epu8(lo, v), zero), _mm256_set1_epi8(-1)); };
-    __m256i v[16];
-    for (const int k : {0, 4, 8, 12}) v[k] = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[k]));
-    const __m256i b0 = brighter(v[0]), b4 = brighter(v[4]), b8 = brighter(v[8]), b12 = brighter(v[12]);
-    const __m256i d0 = darker(v[0]), d4 = darker(v[4]), d8 = darker(v[8]), d12 = darker(v[12]);
+    const auto load = [&](int k) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[k])); };
+    const __m256i n0 = load(0), n4 = load(4), n8 = load(8), n12 = load(12);  // the compass points
+    const __m256i b0 = brighter(n0), b4 = brighter(n4), b8 = brighter(n8), b12 = brighter(n12);
+    const __m256i d0 = darker(n0), d4 = darker(n4), d8 = darker(n8), d12 = darker(n12);
     const __m256i maybe = _mm256_or_si256(
         _mm256_or_si256(_mm256_or_si256(_mm256_and_si256(b0, b4), _mm256_and_si256(b4, b8)),
                         _mm256_or_si256(_mm256_and_si256(b8, b12), _mm256_and_si256(b12, b0))),
@@ -53,13 +36,20 @@ void fast9_row_avx2(const std::uint8_t* row, std::ptrdiff_t stride, int n, int t
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(flags + i), zero);
       continue;
     }
-    for (int k = 0; k < 16; ++k)
-      if (k % 4 != 0) v[k] = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + offset[k]));
-    __m256i planes[16];
-    for (int k = 0; k < 16; ++k) planes[k] = brighter(v[k]);
-    const __m256i bright = arc_of_9(planes);
-    for (int k = 0; k < 16; ++k) planes[k] = darker(v[k]);
-    const __m256i dark = arc_of_9(planes);
+    // Longest run of brighter (darker) circle pixels over one and a half turns (runs across
+    // the circle's start seen whole); a corner has a run of 9.
+    __m256i run_b = zero, run_d = zero, max_b = zero, max_d = zero;
+    for (int k = 0; k < 24; ++k) {
+      const __m256i x = load(k & 15);
+      run_b = _mm256_and_si256(_mm256_add_epi8(run_b, one), brighter(x));
+      run_d = _mm256_and_si256(_mm256_add_epi8(run_d, one), darker(x));
+      max_b = _mm256_max_epu8(max_b, run_b);
+      max_d = _mm256_max_epu8(max_d, run_d);
+    }
+    const __m256i eight = _mm256_set1_epi8(8);
+    // max >= 9  <=>  max -sat 8 != 0
+    const __m256i bright = _mm256_xor_si256(_mm256_cmpeq_epi8(_mm256_subs_epu8(max_b, eight), zero), _mm256_set1_epi8(-1));
+    const __m256i dark = _mm256_xor_si256(_mm256_cmpeq_epi8(_mm256_subs_epu8(max_d, eight), zero), _mm256_set1_epi8(-1));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(flags + i),
                         _mm256_or_si256(_mm256_and_si256(bright, one), _mm256_and_si256(dark, two)));
   }

@@ -219,7 +219,17 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
     for (int y = y_begin; y < y_end; ++y) {
       const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
       fast9_row_(row + x_begin, stride, x_end - x_begin, t, flags);
-      for (int i = 0; i < x_end - x_begin; ++i) {
+      const int n = x_end - x_begin;
+      for (int i = 0; i < n; ++i) {
+        // Corners are sparse: skip eight flags at a time while they are all zero.
+        if ((i & 7) == 0 && i + 8 <= n) {
+          std::uint64_t eight;
+          std::memcpy(&eight, flags + i, sizeof eight);
+          if (eight == 0) {
+            i += 7;
+            continue;
+          }
+        }
         if (flags[i] == 0) continue;
         const int x = x_begin + i;
         // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
