@@ -267,7 +267,12 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
   const int x_begin = kBorder, x_end = w - kBorder, y_begin = kBorder, y_end = h - kBorder;
   if (x_end <= x_begin || y_end <= y_begin) return;
   segment_test(config_.fast_threshold, x_begin, x_end, y_begin, y_end, true);
-  // Cells without a corner at the full threshold look again at the low one.
+  // A level with corners to spare (textured, sharp) keeps to the full threshold: measured on
+  // fr1_xyz, its weak corners cost ~23 M ARM instructions per frame and made the odometry no
+  // better. When blur or a bare scene leaves fewer than kFallbackMargin corners per keypoint
+  // wanted, cells without a corner look again at the low threshold (ORB-SLAM's fallback).
+  const auto nms = [&] { suppress_non_maxima(level); };
+  if (candidates_.size() >= static_cast<size_t>(kFallbackMargin * std::max(L.budget, 1))) return nms();
   std::vector<int>& has = cell_best_;  // reused as "cell has a strong corner" (1) here
   for (const Candidate& c : candidates_)
     has[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)] = 1;
@@ -279,20 +284,25 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
       if (cell_in_mask(xb, xe, yb, ye)) segment_test(kFastLowThreshold, xb, xe, yb, ye, false);
     }
 
+  nms();
+}
+
+void GridOrbExtractor::suppress_non_maxima(int level) {
+  const int w = levels_[static_cast<size_t>(level)].image.cols;
   // 3x3 non-maximum suppression on the score image (strict against earlier pixels, so that of
   // two equal neighbours exactly one survives).
   for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = static_cast<std::uint16_t>(c.score);
-  size_t kept = 0;
-  for (size_t i = 0; i < candidates_.size(); ++i) {
-    const Candidate c = candidates_[i];
+  for (Candidate& c : candidates_) {
     const std::uint16_t* s = score_.data() + c.y * w + c.x;
     const int v = *s;
     const bool is_max = v >= s[-w - 1] && v >= s[-w] && v >= s[-w + 1] && v >= s[-1] && v > s[1] && v > s[w - 1] &&
                         v > s[w] && v > s[w + 1];
-    if (is_max) candidates_[kept++] = c;
+    if (!is_max) c.score = 0;  // suppressed
   }
-  for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = 0;  // clean for the next level
-  candidates_.resize(kept);
+  // The score image clean again for the next level, before any candidate is dropped.
+  for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = 0;
+  candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(), [](const Candidate& c) { return c.score == 0; }),
+                    candidates_.end());
 }
 
 void GridOrbExtractor::select_level(int level, Features& out) {

@@ -6,9 +6,10 @@
 //
 //   pyramid       levels 1.. downscaled from the previous level by scale_factor, bilinear in
 //                 fixed point (weights in 1/256), pixel centres aligned
-//   FAST-9        segment test on each level at fast_threshold; a grid cell that finds no
-//                 corner at it looks again at kFastLowThreshold (ORB-SLAM's fallback), so a
-//                 textureless cell still yields its best corner. Score: the summed excess of
+//   FAST-9        segment test on each level at fast_threshold; on a level short of corners
+//                 (blur, bare scenes) a grid cell that finds none at it looks again at
+//                 kFastLowThreshold (ORB-SLAM's fallback), so a textureless cell still yields
+//                 its best corner. Score: the summed excess of
 //                 the circle's differences over the threshold; 3x3 non-maximum suppression
 //   spread        each level's budget (ORB-SLAM's geometric split of max_features) goes first
 //                 to the best corner of each grid cell, then to the best of the rest
@@ -43,6 +44,9 @@ class GridOrbExtractor {
   bool sized_for(int width, int height) const { return width == width_ && height == height_; }
 
   static constexpr int kFastLowThreshold = 7;
+  // Corners at the full threshold per keypoint wanted below which a level falls back to the
+  // low threshold in its empty cells (fr1_xyz's textured levels have 15 to 40).
+  static constexpr int kFallbackMargin = 4;
   static constexpr int kBorder = 16;  // orientation disc (15) and descriptor support (13 + 2), from each level's edge
   static constexpr int kAngleSteps = 30;
   static constexpr int kDescriptorBits = 256;
@@ -73,6 +77,7 @@ class GridOrbExtractor {
 
   void build_pyramid(const cv::Mat& gray);
   void detect_level(int level, const cv::Mat& mask);
+  void suppress_non_maxima(int level);
   void select_level(int level, Features& out);
   float orientation(const Level& level, int x, int y) const;
   void describe(const Level& level, int x, int y, float angle_deg, std::uint8_t* out) const;
