@@ -35,8 +35,8 @@ void expect_error_naming(const std::function<void()>& f, const std::string& need
 
 TEST(Config, DefaultsAreThePapersTable1) {
   const Config c;
-  EXPECT_EQ(c.features.detector, "ORB");
-  EXPECT_EQ(c.features.descriptor, "ORB");
+  EXPECT_EQ(c.features.detector, "GRID_ORB");
+  EXPECT_EQ(c.features.descriptor, "GRID_ORB");
   EXPECT_DOUBLE_EQ(c.matching.ratio, 0.8);
   EXPECT_DOUBLE_EQ(c.ransac.inlier_threshold_m, 0.05);
   EXPECT_EQ(c.ransac.max_iterations, 200);

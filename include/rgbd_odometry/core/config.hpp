@@ -40,8 +40,8 @@ inline constexpr std::array<std::string_view, 9> kFeatureDetectors{"GRID_ORB", "
 inline constexpr std::array<std::string_view, 6> kFeatureDescriptors{"GRID_ORB", "ORB", "AKAZE", "BRISK", "SIFT", "KAZE"};
 
 struct FeatureConfig {
-  std::string detector = "ORB";
-  std::string descriptor = "ORB";
+  std::string detector = "GRID_ORB";  // ours (pipeline/grid_orb.hpp); OpenCV's by name for comparison
+  std::string descriptor = "GRID_ORB";
   int max_features = 1000;
   int border_px = 16;  // the image periphery dropped before detection (distortion is worst there)
   // ORB's scale pyramid (OpenCV's defaults: 8 levels, factor 1.2) and FAST threshold.
@@ -71,7 +71,7 @@ struct CovarianceConfig {
   // Multiply by the fit's a-posteriori variance factor (covariance.hpp); false: the paper.
   bool residual_variance_factor = true;
   // Multiplies the sample covariance before it is reported; see README "Covariance scale".
-  double scale = 12.0;
+  double scale = 7.0;
 };
 
 // A live OpenNI2 sensor (ignored for recorded sources).
