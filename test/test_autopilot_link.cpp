@@ -182,7 +182,8 @@ double our_offset_error_us(const std::string& output) {
 // GIVEN the simulator on `transport_args`, WHEN the program runs until PX4 converged,
 // THEN convergence within 1 ms, unchanged ODOMETRY, and the user told.
 void converge_over(const std::string& name, const std::function<std::string(const fs::path&)>& link_for,
-                   const std::vector<std::string>& transport_args, int inherit_fd, const std::function<void()>& after_start) {
+                   const std::vector<std::string>& transport_args, int inherit_fd, const std::function<void()>& after_start,
+                   const std::function<void()>& after_run = [] {}) {
   ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink")) << "run: npm ci --prefix test/mavlink_check";
   const fs::path dir = scratch(name);
   std::vector<std::string> args = transport_args;
@@ -199,6 +200,7 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   // 500 used samples at 10 Hz take 50 s and more: the limit only ends a run that never converges.
   const ProgramRun run =
       run_program(link, dir / "odometry.csv", name, [&] { return fs::exists(dir / "converged"); }, 300);
+  after_run();
   ASSERT_EQ(run.rc, 0) << run.output;
   const int sim_rc = wait_exit(sim, 60);
   const std::string result = read_text(dir / "result.json");
@@ -263,8 +265,7 @@ TEST(FlightLinkAutopilot, OverAPseudoTerminalPx4ConvergesAndOdometryIsUnchanged)
   const std::string path = slave_path;
   converge_over(
       "pty", [path](const fs::path&) { return "serial://" + path + ":921600"; }, {"--fd", "3"}, master,
-      [&] { ::close(master); });
-  ::close(slave);
+      [&] { ::close(master); }, [&] { ::close(slave); });  // the program is done: the simulator reads the end
 }
 
 // A peer that appears late, goes away and comes back: the listening link has nobody to send to

@@ -197,6 +197,12 @@ void FlightLink::note_changes(std::int64_t now_ns) {
     ap = watch_.state(now_ns);
     offset = timesync_.estimate();
   }
+  // The peer first: a listening link learns it from the frame that also announced the autopilot.
+  const LinkStats st = link_->stats();
+  if (st.peer_changes != peer_changes_seen_) {
+    peer_changes_seen_ = st.peer_changes;
+    news_.push_back("replying to " + link_->peer());
+  }
   if (ap.known && (!reported_.known || ap.identity != reported_.identity)) {
     news_.push_back("autopilot " + describe(ap.identity) + " heard" +
                     (reported_.known ? " (was " + describe(reported_.identity) + ")" : ""));
@@ -211,11 +217,6 @@ void FlightLink::note_changes(std::int64_t now_ns) {
   if (offset.valid && !reported_offset_) {
     news_.push_back("clock offset to the autopilot " + describe(offset));
     reported_offset_ = true;
-  }
-  const LinkStats st = link_->stats();
-  if (st.peer_changes != peer_changes_seen_) {
-    peer_changes_seen_ = st.peer_changes;
-    news_.push_back("replying to " + link_->peer());
   }
   if (st.problem_reports != problems_seen_) {
     problems_seen_ = st.problem_reports;

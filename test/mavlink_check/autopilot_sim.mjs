@@ -44,6 +44,7 @@
 
 import dgram from 'node:dgram';
 import fs from 'node:fs';
+import tty from 'node:tty';
 import {
   MavLinkPacketSplitter, MavLinkPacketParser, MavLinkProtocolV1, MavLinkProtocolV2, MavLinkPacketSignature,
   minimal, common,
@@ -396,7 +397,8 @@ function main() {
     writeBytes = (b) => {
       try { fs.writeSync(fd, b); } catch (e) { if (e.code !== 'EAGAIN') throw e; r.framesDropped++; }
     };
-    const stream = fs.createReadStream(null, { fd, autoClose: false });
+    // A tty stream reads without blocking a thread-pool thread (which would hold up the exit).
+    const stream = tty.isatty(fd) ? new tty.ReadStream(fd) : fs.createReadStream(null, { fd, autoClose: false });
     stream.on('data', fromProgram);
     stream.on('error', () => finish('eof'));  // EIO once the program closed its side
     stream.on('end', () => finish('eof'));
