@@ -23,6 +23,8 @@
 
 #include <gtest/gtest.h>
 
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/link/flight_link.hpp"
 #include "rgbd_odometry/link/transport.hpp"
 #include "pty_test_env.hpp"
 
@@ -86,6 +88,49 @@ TEST(LinkAllocations, SerialSendToAPeerThatDoesNotReadAllocatesNothing) {
   EXPECT_EQ(n, 0);
   EXPECT_GT(link->stats().frames_dropped_queue_full, 0u);
   ::close(master);
+}
+
+// The receiver: a flood of TIMESYNC requests (each answered at once, from the receiver
+// thread), heartbeats and noise costs no allocation once the link is up.
+TEST(LinkAllocations, ReceiverAnsweringAFloodAllocatesNothing) {
+  const int peer = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof a;
+  ::bind(peer, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  ::getsockname(peer, reinterpret_cast<sockaddr*>(&a), &length);
+  Config config;
+  config.link.uri = "udp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  FlightLink flight(config);
+  flight.tick(0);  // the heartbeat tells us the link's source address
+  sockaddr_in from{};
+  socklen_t from_length = sizeof from;
+  std::uint8_t buffer[512];
+  ASSERT_GT(::recvfrom(peer, buffer, sizeof buffer, 0, reinterpret_cast<sockaddr*>(&from), &from_length), 0);
+  ::connect(peer, reinterpret_cast<sockaddr*>(&from), from_length);
+  // A TIMESYNC request from system 1 component 1 (CRC_EXTRA 34), ts1 = 1, trimmed to 9 bytes.
+  mavlink::Framer framer(1, 1);
+  mavlink::FrameBuffer request{};
+  mavlink::Timesync ask;
+  ask.ts1 = 1;
+  const std::size_t n = framer.encode(ask, request);
+  std::uint8_t noise[200];
+  for (std::size_t i = 0; i < sizeof noise; ++i) noise[i] = static_cast<std::uint8_t>(i * 37 + 0xFD * (i % 7 == 0));
+  // Warm-up: the first answer (the receiver's first frame) and the peer settled.
+  ::send(peer, request.data(), n, 0);
+  ASSERT_GT(::recv(peer, buffer, sizeof buffer, 0), 0);
+  const long allocations = allocations_during([&] {
+    for (int i = 0; i < 2000; ++i) {
+      ::send(peer, request.data(), n, 0);
+      ::send(peer, noise, sizeof noise, 0);
+      if (i % 50 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));  // let the receiver keep up
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  });
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(flight.receive_stats().timesync_requests_answered, 100u);
+  ::close(peer);
 }
 
 }  // namespace

@@ -57,6 +57,31 @@ TEST(LinkUri, UdpLocalPortOption) {
   EXPECT_EQ(udp("udp://10.0.0.2:14550?local_port=0").local_port, 0);
 }
 
+TEST(LinkUri, UdpInListensOnAnAddressOrAll) {
+  const UdpLinkOptions any = udp("udpin://:14540");
+  EXPECT_TRUE(any.listen);
+  EXPECT_EQ(any.host, "");
+  EXPECT_EQ(any.port, 14540);
+  const UdpLinkOptions v4 = udp("udpin://0.0.0.0:14540");
+  EXPECT_TRUE(v4.listen);
+  EXPECT_EQ(v4.host, "0.0.0.0");
+  const UdpLinkOptions v6 = udp("udpin://[::]:14540");
+  EXPECT_TRUE(v6.listen);
+  EXPECT_EQ(v6.host, "::");
+  EXPECT_EQ(v6.port, 14540);
+  EXPECT_FALSE(udp("udp://10.0.0.2:14550").listen);
+}
+
+TEST(LinkUri, UdpInMistakesAreNamed) {
+  EXPECT_NE(rejection("udpin://").find("missing port"), std::string::npos);
+  EXPECT_NE(rejection("udpin://:").find("missing port"), std::string::npos);
+  EXPECT_NE(rejection("udpin://:0").find("out of range"), std::string::npos);
+  EXPECT_NE(rejection("udpin://::1:14540").find("brackets"), std::string::npos);
+  EXPECT_NE(rejection("udpin://[::1:14540").find("closing"), std::string::npos);
+  EXPECT_NE(rejection("udpin://:14540?local_port=1").find("unknown udpin option"), std::string::npos);
+  EXPECT_NE(rejection("tcp://x:1").find("udpin://"), std::string::npos) << "the forms are listed";
+}
+
 TEST(LinkUri, SerialPathAndBaud) {
   const SerialLinkOptions defaults = serial("serial:///dev/ttyUSB0");
   EXPECT_EQ(defaults.device_path, "/dev/ttyUSB0");

@@ -223,5 +223,53 @@ TEST(UdpLink, EmptyAndOversizedFramesAreRejectedAndCounted) {
   EXPECT_EQ(got->size(), kMaxLinkFrameBytes);
 }
 
+// udpin: nobody to send to until a datagram arrives and is confirmed as MAVLink
+// (reply_to_last_sender), then its sender gets the frames; a second sender takes over.
+TEST(UdpInLink, SendsNothingUntilAPeerSpeaksThenAnswersTheLastOne) {
+  int probe = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof a;
+  ::bind(probe, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  ::getsockname(probe, reinterpret_cast<sockaddr*>(&a), &length);
+  ::close(probe);
+  const auto link = open_link("udpin://127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
+  const std::vector<std::uint8_t> frame(40, 0xAB);
+  EXPECT_EQ(link->send(frame), SendResult::DroppedLinkDown);
+  EXPECT_EQ(link->stats().frames_dropped_link_down, 1u);
+  EXPECT_TRUE(link->peer().empty());
+
+  auto peer_socket = [&] {
+    const int s = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_in any{};
+    any.sin_family = AF_INET;
+    any.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::bind(s, reinterpret_cast<sockaddr*>(&any), sizeof any);
+    ::connect(s, reinterpret_cast<sockaddr*>(&a), sizeof a);
+    timeval tv{5, 0};
+    ::setsockopt(s, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    return s;
+  };
+  std::vector<std::uint8_t> into(kMaxDatagramBytes);
+  for (int round = 0; round < 2; ++round) {
+    const int peer = peer_socket();
+    const std::uint8_t hello[3] = {1, 2, static_cast<std::uint8_t>(round)};
+    ASSERT_EQ(::send(peer, hello, sizeof hello, 0), 3);
+    ReceiveResult got;
+    for (int i = 0; i < 50 && got.bytes == 0; ++i) got = link->receive(into, 100);
+    ASSERT_EQ(got.bytes, 3u);
+    EXPECT_TRUE(got.datagram);
+    EXPECT_EQ(into[2], round);
+    link->reply_to_last_sender();
+    EXPECT_FALSE(link->peer().empty());
+    EXPECT_EQ(link->stats().peer_changes, static_cast<std::uint64_t>(round + 1));
+    EXPECT_EQ(link->send(frame), SendResult::Sent);
+    std::uint8_t back[64] = {};
+    EXPECT_EQ(::recv(peer, back, sizeof back, 0), 40) << "the last sender gets the frame";
+    ::close(peer);
+  }
+}
+
 }  // namespace
 }  // namespace rgbdo

@@ -21,6 +21,7 @@ namespace rgbdo {
 namespace {
 
 std::atomic<bool> g_stop{false};
+constexpr std::int64_t kLinkStatusPeriod_ns = 10'000'000'000;
 
 // The configuration file, then the overrides in order, then --link; checked as a whole.
 Config configure(const RunOptions& options) {
@@ -144,9 +145,17 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   try {
     RealtimePipeline pipeline(config, *feed, on_output, on_message);
     if (flight) {
-      pipeline.set_tick([&] {
-        flight->tick(steady_now_ns());
-        if (const std::string news = flight->news(); !news.empty()) on_message("link: " + news);
+      // The link's own status line beside the runtime's (every 10 s), and its news at once:
+      // an autopilot appearing or going is told within one tick of being noticed.
+      std::int64_t next_link_status_ns = steady_now_ns() + kLinkStatusPeriod_ns;
+      pipeline.set_tick([&, next_link_status_ns]() mutable {
+        const std::int64_t now_ns = steady_now_ns();
+        flight->tick(now_ns);
+        for (std::string news = flight->news(); !news.empty(); news = flight->news()) on_message("link: " + news);
+        if (now_ns >= next_link_status_ns) {
+          next_link_status_ns += kLinkStatusPeriod_ns;
+          on_message("link status: " + flight->status_line());
+        }
       });
     }
     run = pipeline.run(g_stop);
@@ -167,6 +176,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down
         << " dropped (" << st.frames_dropped_link_down << " while the link was down), " << st.reconnects
         << " reconnects\n";
+    out << "  link status: " << flight->status_line() << "\n";
   }
   return 0;
 }

@@ -78,6 +78,10 @@ std::vector<Param> param_table(Config& c) {
       {"link.quality_sigma_fail_m", &c.link.quality_sigma_fail_m, 1e-4, 10},
       {"link.velocity_error_min_mps", &c.link.velocity_error_min_mps, 0.0, 100},
       {"link.velocity_error_max_mps", &c.link.velocity_error_max_mps, 0.0, 100},
+      {"link.autopilot_system_id", &c.link.autopilot_system_id, 0, 255},
+      {"link.autopilot_timeout_s", &c.link.autopilot_timeout_s, 0.2, 60},
+      {"link.timesync_rate_hz", &c.link.timesync_rate_hz, 0.0, 20},
+      {"link.timesync_max_rtt_ms", &c.link.timesync_max_rtt_ms, 0.1, 10000},
       {"seed", &c.seed, 0, 1.8e19},
   };
 }

@@ -1,13 +1,20 @@
 #include "rgbd_odometry/link/flight_link.hpp"
 
+#include <pthread.h>
+
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <sstream>
+
+#include "rgbd_odometry/core/clock.hpp"
 
 namespace rgbdo {
 namespace {
 
 constexpr std::int64_t kHeartbeatPeriodNs = 1'000'000'000;
+// The longest the receiver waits in receive() before looking at stop_ again.
+constexpr int kReceivePoll_ms = 100;
 constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kFrameRateHz = 30.0;  // the sensor's rate, for the serial capacity check
 
@@ -18,6 +25,36 @@ MavlinkOdometryConfig message_config(const Config& c) {
   m.velocity_error_min_mps = c.link.velocity_error_min_mps;
   m.velocity_error_max_mps = c.link.velocity_error_max_mps;
   return m;
+}
+
+std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
+
+std::string seconds_ago(std::int64_t now_ns, std::int64_t then_ns) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f s", static_cast<double>(now_ns - then_ns) * 1e-9);
+  return text;
+}
+
+std::string describe(const AutopilotIdentity& id) {
+  std::string s = autopilot_name(id.autopilot);
+  if (s == "autopilot") s += " type " + std::to_string(id.autopilot);
+  return s + " (system " + std::to_string(id.system_id) + ", component " + std::to_string(id.component_id) + ")";
+}
+
+// "+1234.567890123 s (round trip 0.41 ms, 57 samples)"
+std::string describe(const TimesyncEstimate& e) {
+  char text[96];
+  const long long s = e.offset_ns / 1'000'000'000, ns = std::llabs(e.offset_ns % 1'000'000'000);
+  std::snprintf(text, sizeof text, "%s%lld.%09lld s (round trip %.2f ms, %llu samples)",
+                e.offset_ns < 0 && s == 0 ? "-" : (e.offset_ns >= 0 ? "+" : ""), s, ns,
+                static_cast<double>(e.rtt_ns) * 1e-6, static_cast<unsigned long long>(e.samples));
+  return text;
+}
+
+// A TIMESYNC's target fields name us, or nobody in particular (0: broadcast, a v1 sender).
+bool addressed_to(const mavlink::Timesync& m, std::uint8_t system_id, std::uint8_t component_id) {
+  return (m.target_system == 0 || m.target_system == system_id) &&
+         (m.target_component == 0 || m.target_component == component_id);
 }
 
 }  // namespace
@@ -36,25 +73,155 @@ CameraExtrinsic extrinsic_from(const BodyConfig& body) {
 FlightLink::FlightLink(const Config& config)
     : config_(config.link), options_(parse_link_uri(config.link.uri)), link_(open_link(options_)),
       builder_(message_config(config)),
-      framer_(static_cast<std::uint8_t>(config.link.system_id), mavlink::kMavCompIdVisualInertialOdometry) {}
+      timesync_period_ns_(config.link.timesync_rate_hz > 0 ? seconds_to_ns(1.0 / config.link.timesync_rate_hz) : 0),
+      framer_(static_cast<std::uint8_t>(config.link.system_id), mavlink::kMavCompIdVisualInertialOdometry),
+      watch_(static_cast<std::uint8_t>(config.link.autopilot_system_id), static_cast<std::uint8_t>(config.link.system_id),
+             mavlink::kMavCompIdVisualInertialOdometry, seconds_to_ns(config.link.autopilot_timeout_s)),
+      timesync_(seconds_to_ns(config.link.timesync_max_rtt_ms * 1e-3)),
+      receive_buffer_(kMaxDatagramBytes) {
+  problems_seen_ = link_->stats().problem_reports;  // what is wrong at start is in startup_report()
+  receiver_ = std::thread([this] { receive_loop(); });
+}
 
-void FlightLink::send(std::size_t bytes) { (void)link_->send(std::span<const std::uint8_t>(buffer_.data(), bytes)); }
+FlightLink::~FlightLink() {
+  stop_ = true;
+  receiver_.join();
+}
+
+template <typename Message>
+void FlightLink::send_message(const Message& message) {
+  std::lock_guard lock(send_mutex_);
+  (void)link_->send(std::span<const std::uint8_t>(buffer_.data(), framer_.encode(message, buffer_)));
+}
 
 void FlightLink::send_pair(const PairResult& pair) {
   if (pair.status == Status::SensorLost) builder_.note_sensor_reset();
   builder_.add(pair);
   if (config_.odometry) {
-    if (const auto odometry = builder_.odometry()) send(framer_.encode(*odometry, buffer_));
+    if (const auto odometry = builder_.odometry()) send_message(*odometry);
   }
   if (config_.vision_position_delta) {
-    if (const auto delta = builder_.vision_position_delta()) send(framer_.encode(*delta, buffer_));
+    if (const auto delta = builder_.vision_position_delta()) send_message(*delta);
   }
 }
 
+void FlightLink::receive_loop() {
+  pthread_setname_np(pthread_self(), "rgbdo-mavlink-rx");  // for top -H on the vehicle
+  while (!stop_.load(std::memory_order_relaxed)) {
+    const ReceiveResult got = link_->receive(receive_buffer_, kReceivePoll_ms);
+    if (got.bytes == 0) continue;
+    const std::int64_t now_ns = steady_now_ns();
+    // A datagram holds whole frames: what is left of the previous one is not continued.
+    if (got.datagram) parser_.reset();
+    bool sender_confirmed = !got.datagram;  // serial: there is only one far end
+    parser_.feed(std::span<const std::uint8_t>(receive_buffer_.data(), got.bytes),
+                 [&](const mavlink::ReceivedFrame& frame) { handle(frame, now_ns, sender_confirmed); });
+    std::lock_guard lock(state_mutex_);
+    parser_counts_ = parser_.counts();
+  }
+}
+
+bool FlightLink::handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns, bool& sender_confirmed) {
+  const auto own_system = static_cast<std::uint8_t>(config_.system_id);
+  const std::uint8_t own_component = mavlink::kMavCompIdVisualInertialOdometry;
+  mavlink::Timesync request;
+  bool answer = false;
+  {
+    std::lock_guard lock(state_mutex_);
+    const AutopilotIdentity before = watch_.state(now_ns).identity;
+    if (!watch_.accept(frame, now_ns)) return false;
+    if (!sender_confirmed) {  // UDP listening: a valid frame makes its sender the peer, before any answer to it
+      link_->reply_to_last_sender();
+      sender_confirmed = true;
+    }
+    if (watch_.state(now_ns).identity != before) timesync_.reset();  // another autopilot, another clock
+    if (frame.msgid != mavlink::Timesync::kId) return true;
+    const mavlink::Timesync m = mavlink::unpack_timesync(frame.payload);
+    if (!addressed_to(m, own_system, own_component)) return true;
+    if (m.tc1 == 0) {
+      request = m;
+      answer = true;
+    } else {
+      (void)timesync_.add_answer(m.tc1, m.ts1, now_ns);
+    }
+  }
+  if (answer) {
+    // At once, from this thread: the requester's round trip is what it measures its offset
+    // with, and it discards long ones (PX4: 10 ms).
+    std::lock_guard lock(send_mutex_);
+    mavlink::Timesync reply;
+    reply.tc1 = steady_now_ns();  // the clock the capture times are on
+    reply.ts1 = request.ts1;
+    reply.target_system = frame.sysid;
+    reply.target_component = frame.compid;
+    (void)link_->send(std::span<const std::uint8_t>(buffer_.data(), framer_.encode(reply, buffer_)));
+    std::lock_guard state_lock(state_mutex_);
+    ++answered_;
+  }
+  return true;
+}
+
 void FlightLink::tick(std::int64_t now_ns) {
-  if (now_ns < next_heartbeat_ns_) return;
-  next_heartbeat_ns_ = now_ns + kHeartbeatPeriodNs;
-  send(framer_.encode(builder_.heartbeat(), buffer_));
+  if (now_ns >= next_heartbeat_ns_) {
+    next_heartbeat_ns_ = now_ns + kHeartbeatPeriodNs;
+    send_message(builder_.heartbeat());
+  }
+  if (timesync_period_ns_ > 0 && now_ns >= next_request_ns_) {
+    mavlink::Timesync request;
+    bool ask = false;
+    {
+      std::lock_guard lock(state_mutex_);
+      const AutopilotState ap = watch_.state(now_ns);
+      if (ap.up) {  // no requests into a void, nor to a ground station
+        request.ts1 = steady_now_ns();
+        request.target_system = ap.identity.system_id;
+        request.target_component = ap.identity.component_id;
+        timesync_.note_request(request.ts1);  // before it can be answered
+        ++requests_sent_;
+        ask = true;
+      }
+    }
+    if (ask) {
+      send_message(request);
+      next_request_ns_ = now_ns + timesync_period_ns_;
+    }
+  }
+  note_changes(now_ns);
+}
+
+void FlightLink::note_changes(std::int64_t now_ns) {
+  AutopilotState ap;
+  TimesyncEstimate offset;
+  {
+    std::lock_guard lock(state_mutex_);
+    ap = watch_.state(now_ns);
+    offset = timesync_.estimate();
+  }
+  // The peer first: a listening link learns it from the frame that also announced the autopilot.
+  const LinkStats st = link_->stats();
+  if (st.peer_changes != peer_changes_seen_) {
+    peer_changes_seen_ = st.peer_changes;
+    news_.push_back("replying to " + link_->peer());
+  }
+  if (ap.known && (!reported_.known || ap.identity != reported_.identity)) {
+    news_.push_back("autopilot " + describe(ap.identity) + " heard" +
+                    (reported_.known ? " (was " + describe(reported_.identity) + ")" : ""));
+    reported_offset_ = false;
+  }
+  if (ap.known && ap.up != reported_.up) {
+    news_.push_back(ap.up ? "autopilot " + describe(ap.identity) + " up"
+                          : "autopilot " + describe(ap.identity) + " gone: nothing heard from it for " +
+                                seconds_ago(now_ns, ap.last_frame_ns));
+  }
+  reported_ = ap;
+  if (offset.valid && !reported_offset_) {
+    news_.push_back("clock offset to the autopilot " + describe(offset));
+    reported_offset_ = true;
+  }
+  if (st.problem_reports != problems_seen_) {
+    problems_seen_ = st.problem_reports;
+    news_.push_back(link_->last_problem());
+  }
 }
 
 std::string FlightLink::startup_report() const {
@@ -62,6 +229,15 @@ std::string FlightLink::startup_report() const {
   s << "MAVLink 2 to " << link_->description() << " as system " << config_.system_id << " component "
     << static_cast<int>(mavlink::kMavCompIdVisualInertialOdometry) << ":" << (config_.odometry ? " ODOMETRY" : "")
     << (config_.vision_position_delta ? " VISION_POSITION_DELTA" : "") << " per frame pair, HEARTBEAT at 1 Hz";
+  s << "\nlistening on the same link: following the HEARTBEAT of "
+    << (config_.autopilot_system_id == 0 ? std::string("the first autopilot heard")
+                                         : "the autopilot of system " + std::to_string(config_.autopilot_system_id))
+    << " (gone after " << config_.autopilot_timeout_s << " s of silence), answering its TIMESYNC requests, ";
+  if (timesync_period_ns_ > 0)
+    s << "asking its clock offset at " << config_.timesync_rate_hz << " Hz while it is up";
+  else
+    s << "not asking its clock offset (link.timesync_rate_hz 0)";
+  s << "\n" << status_line();
   if (const auto* serial = std::get_if<SerialLinkOptions>(&options_)) {
     // Wire bytes per pair: each message's full payload plus 12 bytes of framing.
     const std::size_t bytes = (config_.odometry ? mavlink::Odometry::kPayloadBytes + 12 : 0) +
@@ -73,10 +249,56 @@ std::string FlightLink::startup_report() const {
 }
 
 std::string FlightLink::news() {
-  const LinkStats st = link_->stats();
-  if (st.problem_reports == problems_seen_) return {};
-  problems_seen_ = st.problem_reports;
-  return link_->last_problem();
+  if (news_.empty()) return {};
+  std::string item = std::move(news_.front());
+  news_.erase(news_.begin());
+  return item;
+}
+
+LinkReceiveStats FlightLink::receive_stats() const {
+  LinkReceiveStats r;
+  std::lock_guard lock(state_mutex_);
+  r.parser = parser_counts_;
+  r.autopilot = watch_.state(steady_now_ns());
+  r.timesync = timesync_.estimate();
+  r.timesync_requests_answered = answered_;
+  r.timesync_requests_sent = requests_sent_;
+  return r;
+}
+
+std::optional<std::int64_t> FlightLink::to_autopilot_time_ns(std::int64_t time_ns) const {
+  std::lock_guard lock(state_mutex_);
+  return timesync_.to_autopilot_ns(time_ns);
+}
+
+std::string FlightLink::status_line() const {
+  const std::int64_t now_ns = steady_now_ns();
+  const LinkReceiveStats r = receive_stats();
+  const AutopilotState& ap = r.autopilot;
+  std::ostringstream s;
+  if (!ap.known) {
+    s << "no autopilot heard";
+  } else if (ap.up) {
+    s << "autopilot " << describe(ap.identity) << " up, last heartbeat " << seconds_ago(now_ns, ap.last_heartbeat_ns)
+      << " ago";
+  } else {
+    s << "autopilot " << describe(ap.identity) << " GONE: nothing heard for " << seconds_ago(now_ns, ap.last_frame_ns)
+      << ", last heartbeat " << seconds_ago(now_ns, ap.last_heartbeat_ns) << " ago";
+  }
+  if (ap.known) {
+    if (r.timesync.valid)
+      s << "; clock offset " << describe(r.timesync);
+    else
+      s << "; clock offset " << (timesync_period_ns_ > 0 ? "not measured yet" : "not asked");
+    s << ", " << r.timesync_requests_answered << " of its TIMESYNC requests answered";
+  }
+  if (const std::string peer = link_->peer(); !peer.empty()) s << "; peer " << peer;
+  if (std::holds_alternative<UdpLinkOptions>(options_) && std::get<UdpLinkOptions>(options_).listen && link_->peer().empty())
+    s << "; no peer yet";
+  s << "; received " << r.parser.frames_ok << " frames (" << r.parser.crc_errors << " bad checksums, "
+    << r.parser.unknown_ids << " other messages, " << r.parser.bytes_discarded << " bytes of noise, "
+    << ap.ignored_frames << " from other systems)";
+  return s.str();
 }
 
 }  // namespace rgbdo

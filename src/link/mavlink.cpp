@@ -17,6 +17,16 @@ void put_u64(std::span<std::uint8_t> out, std::size_t offset, std::uint64_t v) {
   for (std::size_t i = 0; i < 8; ++i) out[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
 }
 
+void put_i64(std::span<std::uint8_t> out, std::size_t offset, std::int64_t v) {
+  put_u64(out, offset, static_cast<std::uint64_t>(v));  // two's complement
+}
+
+std::uint64_t get_le(std::span<const std::uint8_t> in, std::size_t offset, std::size_t bytes) {
+  std::uint64_t v = 0;
+  for (std::size_t i = bytes; i-- > 0;) v = (v << 8) | in[offset + i];
+  return v;
+}
+
 void put_f32(std::span<std::uint8_t> out, std::size_t offset, float v) {
   static_assert(std::numeric_limits<float>::is_iec559, "MAVLink floats are IEEE 754 binary32");
   put_u32(out, offset, std::bit_cast<std::uint32_t>(v));
@@ -42,6 +52,33 @@ void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloa
   put_u8(out, Heartbeat::kBaseModeOffset, m.base_mode);
   put_u8(out, Heartbeat::kSystemStatusOffset, m.system_status);
   put_u8(out, Heartbeat::kMavlinkVersionOffset, m.mavlink_version);
+}
+
+void pack_payload(const Timesync& m, std::span<std::uint8_t, Timesync::kPayloadBytes> out) {
+  put_i64(out, Timesync::kTc1Offset, m.tc1);
+  put_i64(out, Timesync::kTs1Offset, m.ts1);
+  put_u8(out, Timesync::kTargetSystemOffset, m.target_system);
+  put_u8(out, Timesync::kTargetComponentOffset, m.target_component);
+}
+
+Heartbeat unpack_heartbeat(std::span<const std::uint8_t, kMaxPayloadBytes> payload) {
+  Heartbeat m;
+  m.custom_mode = static_cast<std::uint32_t>(get_le(payload, Heartbeat::kCustomModeOffset, 4));
+  m.type = payload[Heartbeat::kTypeOffset];
+  m.autopilot = payload[Heartbeat::kAutopilotOffset];
+  m.base_mode = payload[Heartbeat::kBaseModeOffset];
+  m.system_status = payload[Heartbeat::kSystemStatusOffset];
+  m.mavlink_version = payload[Heartbeat::kMavlinkVersionOffset];
+  return m;
+}
+
+Timesync unpack_timesync(std::span<const std::uint8_t, kMaxPayloadBytes> payload) {
+  Timesync m;
+  m.tc1 = static_cast<std::int64_t>(get_le(payload, Timesync::kTc1Offset, 8));
+  m.ts1 = static_cast<std::int64_t>(get_le(payload, Timesync::kTs1Offset, 8));
+  m.target_system = payload[Timesync::kTargetSystemOffset];
+  m.target_component = payload[Timesync::kTargetComponentOffset];
+  return m;
 }
 
 void pack_payload(const Odometry& m, std::span<std::uint8_t, Odometry::kPayloadBytes> out) {
@@ -103,6 +140,11 @@ std::size_t Framer::finish_frame(std::uint32_t message_id, std::uint8_t crc_extr
 std::size_t Framer::encode(const Heartbeat& m, FrameSpan out) {
   pack_payload(m, payload_area<Heartbeat>(out));
   return finish_frame(Heartbeat::kId, Heartbeat::kCrcExtra, Heartbeat::kPayloadBytes, out);
+}
+
+std::size_t Framer::encode(const Timesync& m, FrameSpan out) {
+  pack_payload(m, payload_area<Timesync>(out));
+  return finish_frame(Timesync::kId, Timesync::kCrcExtra, Timesync::kPayloadBytes, out);
 }
 
 std::size_t Framer::encode(const Odometry& m, FrameSpan out) {

@@ -14,7 +14,7 @@
 namespace rgbdo {
 namespace {
 
-constexpr std::string_view kUriForms = "udp://HOST:PORT or serial:///dev/DEVICE[:BAUD]";
+constexpr std::string_view kUriForms = "udp://HOST:PORT, udpin://[ADDRESS]:PORT or serial:///dev/DEVICE[:BAUD]";
 // Bounds the queue's up-front allocation; 4096 frames is over two minutes at 30 Hz.
 constexpr long long kMaxQueueFrames = 4096;
 
@@ -79,6 +79,35 @@ UdpLinkOptions parse_udp(const std::string& uri, std::string_view rest, std::str
       o.local_port = parse_port(uri, "local_port", value, true);
     else
       fail(uri, "unknown udp option '" + std::string(key) + "' (known: local_port)");
+  });
+  return o;
+}
+
+// udpin://[ADDRESS]:PORT: the address to listen on may be left out (any IPv4 address).
+UdpLinkOptions parse_udpin(const std::string& uri, std::string_view rest, std::string_view query) {
+  UdpLinkOptions o;
+  o.listen = true;
+  std::string_view port_text;
+  if (rest.empty()) fail(uri, "missing port (expected udpin://[ADDRESS]:PORT, e.g. udpin://:14540)");
+  if (rest.front() == '[') {  // udpin://[::]:14540
+    const auto close = rest.find(']');
+    if (close == std::string_view::npos) fail(uri, "IPv6 address without its closing ']'");
+    o.host = std::string(rest.substr(1, close - 1));
+    if (o.host.empty()) fail(uri, "empty IPv6 address (udpin://[::]:PORT listens on all)");
+    const std::string_view after = rest.substr(close + 1);
+    if (after.empty() || after.front() != ':') fail(uri, "missing port (expected udpin://[ADDRESS]:PORT)");
+    port_text = after.substr(1);
+  } else {
+    const auto colon = rest.rfind(':');
+    if (colon == std::string_view::npos) fail(uri, "missing port (expected udpin://[ADDRESS]:PORT, e.g. udpin://:14540)");
+    if (rest.find(':') != colon) fail(uri, "an IPv6 address needs brackets: udpin://[ADDRESS]:PORT");
+    o.host = std::string(rest.substr(0, colon));
+    port_text = rest.substr(colon + 1);
+  }
+  if (port_text.empty()) fail(uri, "missing port (expected udpin://[ADDRESS]:PORT)");
+  o.port = parse_port(uri, "port", port_text, false);
+  for_each_option(uri, query, [&](std::string_view key, std::string_view) {
+    fail(uri, "unknown udpin option '" + std::string(key) + "' (udpin takes none)");
   });
   return o;
 }
@@ -151,6 +180,7 @@ LinkOptions parse_link_uri(const std::string& uri) {
     rest = rest.substr(0, q);
   }
   if (scheme == "udp") return parse_udp(uri, rest, query);
+  if (scheme == "udpin") return parse_udpin(uri, rest, query);
   if (scheme == "serial") return parse_serial(uri, rest, query);
   fail(uri, "unknown scheme '" + scheme + "' (expected " + std::string(kUriForms) + ")");
 }

@@ -13,6 +13,11 @@
 // frames sent meanwhile wait in the ring (oldest dropped). The frame being written when the
 // device went is dropped: it is the oldest, and newer ones are waiting.
 //
+// Receiving: the receiver thread reads the same device through a dup() of the writer's
+// descriptor, handed over at every (re-)open, so the two threads never share an fd number the
+// other may close and reuse. A device that goes away hangs up both copies; the reader drops
+// its own and waits for the next hand-over.
+//
 // A device path that does not exist when the link is made is not an error either: a
 // USB-serial adapter, or a flight controller powered separately from the companion computer,
 // may enumerate seconds after the odometry service starts, and throwing would only make
@@ -31,6 +36,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <condition_variable>
 #include <cstring>
@@ -38,6 +44,7 @@
 #include <optional>
 #include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "transport_problem.hpp"
@@ -196,6 +203,7 @@ class SerialLink final : public OutputLink {
     if (first.fd >= 0) {
       fd_ = first.fd;
       up_ = true;
+      hand_to_reader(fd_);
     } else {
       ++errors_;
       problem_.report(first.what, first.err);
@@ -219,6 +227,8 @@ class SerialLink final : public OutputLink {
     }
     wake_writer_.notify_all();
     writer_.join();
+    if (reader_fd_ >= 0) ::close(reader_fd_);
+    if (reader_handoff_fd_ >= 0) ::close(reader_handoff_fd_);
   }
 
   SendResult send(std::span<const std::uint8_t> frame) noexcept override {
@@ -265,6 +275,7 @@ class SerialLink final : public OutputLink {
       s.reconnects = reconnects_;
       s.link_up = up_;
     }
+    s.bytes_received = bytes_received_.load(std::memory_order_relaxed);
     s.problem_reports = problem_.reports();
     return s;
   }
@@ -272,7 +283,49 @@ class SerialLink final : public OutputLink {
   std::string last_problem() const override { return problem_.text(); }
   std::string description() const override { return description_; }
 
+  ReceiveResult receive(std::span<std::uint8_t> into, int timeout_ms) noexcept override {
+    {
+      std::unique_lock lock(mutex_);
+      if (reader_handoff_fd_ >= 0) {  // the device was (re-)opened: read the new one
+        if (reader_fd_ >= 0) ::close(reader_fd_);
+        reader_fd_ = std::exchange(reader_handoff_fd_, -1);
+      } else if (reader_fd_ < 0) {  // no device now: wait for one, a bounded time
+        wake_reader_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [this] { return reader_handoff_fd_ >= 0; });
+        return {};
+      }
+    }
+    pollfd p{reader_fd_, POLLIN, 0};
+    if (::poll(&p, 1, timeout_ms) <= 0) return {};
+    if ((p.revents & POLLIN) == 0) {  // hung up: the writer notices too, and re-opens
+      drop_reader_fd();
+      return {};
+    }
+    const ssize_t n = ::read(reader_fd_, into.data(), into.size());
+    if (n <= 0) {
+      if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) drop_reader_fd();
+      return {};
+    }
+    bytes_received_.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+    return {static_cast<std::size_t>(n), false};
+  }
+
  private:
+  void hand_to_reader(int fd) {
+    const int copy = ::fcntl(fd, F_DUPFD_CLOEXEC, 0);
+    if (copy < 0) return;  // out of descriptors: sending goes on, receiving waits for the next open
+    {
+      std::lock_guard lock(mutex_);
+      if (reader_handoff_fd_ >= 0) ::close(reader_handoff_fd_);
+      reader_handoff_fd_ = copy;
+    }
+    wake_reader_.notify_all();
+  }
+
+  void drop_reader_fd() {
+    ::close(reader_fd_);
+    reader_fd_ = -1;
+  }
+
   void writer_loop() {
     pthread_setname_np(pthread_self(), "rgbdo-serial");  // for top -H on the vehicle
     while (!stopping()) {
@@ -305,9 +358,12 @@ class SerialLink final : public OutputLink {
       const OpenAttempt attempt = open_device(path_, speed_);
       if (attempt.fd >= 0) {
         fd_ = attempt.fd;
-        std::lock_guard lock(mutex_);
-        up_ = true;
-        ++reconnects_;
+        {
+          std::lock_guard lock(mutex_);
+          up_ = true;
+          ++reconnects_;
+        }
+        hand_to_reader(fd_);
         return;
       }
       {
@@ -402,6 +458,12 @@ class SerialLink final : public OutputLink {
   std::int64_t stop_deadline_ns_ = 0;
   std::uint64_t sent_ = 0, bytes_ = 0, dropped_queue_full_ = 0, dropped_link_down_ = 0, rejected_ = 0, errors_ = 0,
                 reconnects_ = 0;
+
+  // The receiver thread's own descriptor, and the one the writer hands over at an open (under mutex_).
+  int reader_fd_ = -1;
+  int reader_handoff_fd_ = -1;
+  std::condition_variable wake_reader_;
+  std::atomic<std::uint64_t> bytes_received_{0};
 
   std::thread writer_;
 };

@@ -1,5 +1,9 @@
 // MAVLink frames as UDP datagrams to one peer (a flight computer on Ethernet, mavlink-router,
 // a simulator). One datagram per frame, so frames can be lost but never split or merged.
+// Two ways to find the peer: a fixed address (udp://HOST:PORT, UdpLink) or listening on a port
+// and answering whoever sent the last valid MAVLink frame (udpin://[ADDR]:PORT, UdpListenLink),
+// as PX4 and MAVSDK do. Both receive on the socket they send from (receive(), on the link's
+// receiver thread): a datagram is read whole, and the sender never waits for the receiver.
 //
 // The socket is non-blocking and connect()ed to the peer: a send either goes to the kernel at
 // once or fails at once, and the ICMP "port unreachable" that comes back while nothing listens
@@ -11,12 +15,14 @@
 #include <arpa/inet.h>
 #include <netdb.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <mutex>
 
 #include "transport_problem.hpp"
 #include "rgbd_odometry/link/transport.hpp"
@@ -142,11 +148,31 @@ class UdpLink final : public OutputLink {
     s.reconnects = reconnects_.load(std::memory_order_relaxed);
     s.problem_reports = problem_.reports();
     s.link_up = up_.load(std::memory_order_relaxed);
+    s.bytes_received = bytes_received_.load(std::memory_order_relaxed);
     return s;
   }
 
   std::string last_problem() const override { return problem_.text(); }
   std::string description() const override { return description_; }
+
+  // The socket is connect()ed: the kernel delivers datagrams from the peer only.
+  ReceiveResult receive(std::span<std::uint8_t> into, int timeout_ms) noexcept override {
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, timeout_ms) <= 0) return {};
+    const ssize_t n = ::recv(fd_, into.data(), into.size(), MSG_DONTWAIT);
+    if (n < 0) {
+      // The refusal the ICMP "port unreachable" reports goes to whichever call on the socket
+      // comes first; when that is this one, it is reported here as send() would have.
+      if (errno == ECONNREFUSED) {
+        errors_.fetch_add(1, std::memory_order_relaxed);
+        up_.store(false, std::memory_order_relaxed);
+        problem_.report("peer refused a datagram (nothing listening on its port?)", ECONNREFUSED);
+      }
+      return {};
+    }
+    bytes_received_.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+    return {static_cast<std::size_t>(n), true};
+  }
 
  private:
   void bind_local(std::uint16_t local_port) {
@@ -208,7 +234,187 @@ class UdpLink final : public OutputLink {
   std::int64_t next_connect_ns_ = 0;
   // Read by stats() from any thread.
   std::atomic<std::uint64_t> sent_{0}, bytes_{0}, dropped_queue_full_{0}, dropped_link_down_{0}, rejected_{0},
-      errors_{0}, reconnects_{0};
+      errors_{0}, reconnects_{0}, bytes_received_{0};
+  std::atomic<bool> up_{false};
+  LinkProblem problem_;
+};
+
+bool same_address(const sockaddr_storage& a, socklen_t a_length, const sockaddr_storage& b, socklen_t b_length) {
+  return a_length == b_length && std::memcmp(&a, &b, a_length) == 0;
+}
+
+// Once, at open: the local address to bind (empty host: any IPv4 address).
+PeerAddress resolve_local(const UdpLinkOptions& o, const std::string& name) {
+  PeerAddress local;
+  if (o.host.empty()) {
+    auto& a = reinterpret_cast<sockaddr_in&>(local.address);
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_ANY);
+    a.sin_port = htons(o.port);
+    local.length = sizeof a;
+    return local;
+  }
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_DGRAM;
+  hints.ai_flags = AI_NUMERICSERV | AI_PASSIVE;
+  addrinfo* list = nullptr;
+  const int rc = getaddrinfo(o.host.c_str(), std::to_string(o.port).c_str(), &hints, &list);
+  if (rc != 0) {
+    const std::string why = rc == EAI_SYSTEM ? link_detail::errno_text(errno) : gai_strerror(rc);
+    throw LinkError(name + ": cannot resolve local address '" + o.host + "': " + why);
+  }
+  const addrinfo* chosen = list;
+  for (const addrinfo* a = list; a != nullptr; a = a->ai_next)
+    if (a->ai_family == AF_INET) {
+      chosen = a;
+      break;
+    }
+  std::memcpy(&local.address, chosen->ai_addr, chosen->ai_addrlen);
+  local.length = chosen->ai_addrlen;
+  freeaddrinfo(list);
+  return local;
+}
+
+class UdpListenLink final : public OutputLink {
+ public:
+  explicit UdpListenLink(const UdpLinkOptions& o)
+      : name_("udpin " + (o.host.find(':') != std::string::npos ? "[" + o.host + "]" : o.host) + ":" +
+              std::to_string(o.port)),
+        problem_(name_) {
+    const PeerAddress local = resolve_local(o, name_);
+    fd_ = ::socket(local.address.ss_family, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd_ < 0) throw LinkError(name_ + ": cannot create a socket: " + link_detail::errno_text(errno));
+    if (local.address.ss_family == AF_INET6) {
+      // [::] takes IPv4 peers too (as IPv4-mapped addresses), whatever net.ipv6.bindv6only says.
+      const int off = 0;
+      ::setsockopt(fd_, IPPROTO_IPV6, IPV6_V6ONLY, &off, sizeof off);
+    }
+    if (::bind(fd_, reinterpret_cast<const sockaddr*>(&local.address), local.length) != 0) {
+      const int err = errno;
+      ::close(fd_);
+      throw LinkError(name_ + ": cannot listen on port " + std::to_string(o.port) + ": " + link_detail::errno_text(err));
+    }
+    description_ = name_ + " (listening on " + numeric_address(local.address, local.length) + ":" +
+                   std::to_string(o.port) + ", replying to the last sender of a valid MAVLink frame)";
+    problem_.report("no peer yet: waiting for a MAVLink frame", 0);
+  }
+
+  ~UdpListenLink() override { ::close(fd_); }
+
+  SendResult send(std::span<const std::uint8_t> frame) noexcept override {
+    if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
+      rejected_.fetch_add(1, std::memory_order_relaxed);
+      problem_.report("frame rejected: empty or longer than 280 bytes", 0, false);
+      return SendResult::Rejected;
+    }
+    sockaddr_storage peer{};
+    socklen_t peer_length = 0;
+    {
+      // The receiver holds this lock only to copy an address in: a wait of nanoseconds.
+      std::lock_guard lock(peer_mutex_);
+      peer = peer_;
+      peer_length = peer_length_;
+    }
+    if (peer_length == 0) {  // until someone speaks MAVLink to us there is nobody to send to
+      dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
+      return SendResult::DroppedLinkDown;
+    }
+    const ssize_t n = ::sendto(fd_, frame.data(), frame.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
+                               reinterpret_cast<const sockaddr*>(&peer), peer_length);
+    if (n == static_cast<ssize_t>(frame.size())) {
+      sent_.fetch_add(1, std::memory_order_relaxed);
+      bytes_.fetch_add(frame.size(), std::memory_order_relaxed);
+      up_.store(true, std::memory_order_relaxed);
+      return SendResult::Sent;
+    }
+    const int err = n < 0 ? errno : EMSGSIZE;
+    if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
+      dropped_queue_full_.fetch_add(1, std::memory_order_relaxed);
+      problem_.report("socket send buffer full, frame dropped", err, false);
+      return SendResult::DroppedBufferFull;
+    }
+    errors_.fetch_add(1, std::memory_order_relaxed);
+    dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
+    up_.store(false, std::memory_order_relaxed);
+    problem_.report("send failed", err, false);
+    return SendResult::DroppedLinkDown;
+  }
+
+  ReceiveResult receive(std::span<std::uint8_t> into, int timeout_ms) noexcept override {
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, timeout_ms) <= 0) return {};
+    sockaddr_storage from{};
+    socklen_t from_length = sizeof from;
+    const ssize_t n =
+        ::recvfrom(fd_, into.data(), into.size(), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from), &from_length);
+    if (n < 0) return {};
+    last_from_ = from;
+    last_from_length_ = from_length;
+    bytes_received_.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+    return {static_cast<std::size_t>(n), true};
+  }
+
+  void reply_to_last_sender() noexcept override {
+    if (last_from_length_ == 0 || same_address(last_from_, last_from_length_, current_, current_length_)) return;
+    current_ = last_from_;
+    current_length_ = last_from_length_;
+    std::string text;
+    try {  // once per change of peer, not per frame
+      text = numeric_address(current_, current_length_) + ":" + std::to_string(port_of(current_));
+    } catch (...) {
+      text = "?";
+    }
+    std::lock_guard lock(peer_mutex_);
+    peer_ = current_;
+    peer_length_ = current_length_;
+    peer_text_.swap(text);
+    peer_changes_.fetch_add(1, std::memory_order_relaxed);
+    up_.store(true, std::memory_order_relaxed);
+  }
+
+  std::string peer() const override {
+    std::lock_guard lock(peer_mutex_);
+    return peer_text_;
+  }
+
+  LinkStats stats() const override {
+    LinkStats s;
+    s.frames_sent = sent_.load(std::memory_order_relaxed);
+    s.bytes_sent = bytes_.load(std::memory_order_relaxed);
+    s.frames_dropped_queue_full = dropped_queue_full_.load(std::memory_order_relaxed);
+    s.frames_dropped_link_down = dropped_link_down_.load(std::memory_order_relaxed);
+    s.frames_rejected = rejected_.load(std::memory_order_relaxed);
+    s.errors = errors_.load(std::memory_order_relaxed);
+    s.problem_reports = problem_.reports();
+    s.link_up = up_.load(std::memory_order_relaxed);
+    s.bytes_received = bytes_received_.load(std::memory_order_relaxed);
+    s.peer_changes = peer_changes_.load(std::memory_order_relaxed);
+    return s;
+  }
+
+  std::string last_problem() const override { return problem_.text(); }
+  std::string description() const override { return description_; }
+
+ private:
+  static std::uint16_t port_of(const sockaddr_storage& a) {
+    return ntohs(a.ss_family == AF_INET6 ? reinterpret_cast<const sockaddr_in6&>(a).sin6_port
+                                         : reinterpret_cast<const sockaddr_in&>(a).sin_port);
+  }
+
+  const std::string name_;
+  std::string description_;
+  int fd_ = -1;
+  // The receiver thread's own: the sender of the last datagram, and the peer it last chose.
+  sockaddr_storage last_from_{}, current_{};
+  socklen_t last_from_length_ = 0, current_length_ = 0;
+  // Shared with send() and peer().
+  mutable std::mutex peer_mutex_;
+  sockaddr_storage peer_{};
+  socklen_t peer_length_ = 0;  // 0: no peer yet
+  std::string peer_text_;
+  std::atomic<std::uint64_t> sent_{0}, bytes_{0}, dropped_queue_full_{0}, dropped_link_down_{0}, rejected_{0},
+      errors_{0}, bytes_received_{0}, peer_changes_{0};
   std::atomic<bool> up_{false};
   LinkProblem problem_;
 };
@@ -216,6 +422,10 @@ class UdpLink final : public OutputLink {
 }  // namespace
 
 std::unique_ptr<OutputLink> open_udp_link(const UdpLinkOptions& options) {
+  if (options.listen) {
+    if (options.port == 0) throw LinkError("udpin: port 0 is not a port to listen on (1-65535)");
+    return std::make_unique<UdpListenLink>(options);
+  }
   if (options.port == 0) throw LinkError("udp " + options.host + ": port 0 is not a peer port (1-65535)");
   return std::make_unique<UdpLink>(options);
 }

@@ -108,7 +108,7 @@ struct BodyConfig {
 
 // The MAVLink 2 link to the flight computer (README "Flight-computer link").
 struct LinkConfig {
-  std::string uri;  // udp://HOST:PORT or serial:///dev/ttyX[:BAUD]; empty: no link
+  std::string uri;  // udp://HOST:PORT, udpin://[ADDR]:PORT or serial:///dev/ttyX[:BAUD]; empty: no link
   int system_id = 1;  // the vehicle's: a companion computer shares its autopilot's system id
   bool odometry = true;                 // send ODOMETRY (#331): PX4 EKF2, ArduPilot EKF3
   bool vision_position_delta = false;   // send VISION_POSITION_DELTA (#11011): ArduPilot
@@ -116,6 +116,15 @@ struct LinkConfig {
   // ArduPilot's EK3_VIS_VERR_MIN / _MAX: confidence maps onto that velocity-noise range.
   double velocity_error_min_mps = 0.1;
   double velocity_error_max_mps = 0.9;
+  // The autopilot followed (its HEARTBEAT): only this system id; 0 = the first one heard.
+  int autopilot_system_id = 0;
+  // No frame from the autopilot for this long: reported gone. Above the 1 s heartbeat period
+  // (PX4 and ArduPilot also send other streams) and short enough to tell within 2 s.
+  double autopilot_timeout_s = 1.5;
+  // Our TIMESYNC requests while an autopilot is up (the autopilot's own are always answered); 0: none.
+  double timesync_rate_hz = 1.0;
+  // Answers slower than this round trip are not used for the offset (error bound rtt/2).
+  double timesync_max_rtt_ms = 100;
 };
 
 struct Config {

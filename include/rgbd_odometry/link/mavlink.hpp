@@ -1,7 +1,8 @@
 #pragma once
 // The wire to the flight computer: MAVLink 2 frames, written by hand so that the product
-// carries no generated MAVLink library. Three messages only: HEARTBEAT (common.xml/minimal.xml),
-// ODOMETRY (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml).
+// carries no generated MAVLink library. Four messages only: HEARTBEAT (common.xml/minimal.xml),
+// TIMESYNC, ODOMETRY (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml). Received frames
+// are split and checked by mavlink_parser.hpp; HEARTBEAT and TIMESYNC are also read here.
 //
 // Frame (MAVLink 2, unsigned):
 //   0xFD | len | incompat_flags=0 | compat_flags=0 | seq | sysid | compid | msgid (3 B, LE)
@@ -25,6 +26,8 @@ namespace rgbdo::mavlink {
 
 // ---- frame layout ---------------------------------------------------------------------
 inline constexpr std::uint8_t kMagicV2 = 0xFD;
+inline constexpr std::uint8_t kMagicV1 = 0xFE;  // received only: autopilots still emit it on some ports
+inline constexpr std::uint8_t kIncompatFlagSigned = 0x01;  // a 13-byte signature follows the checksum
 inline constexpr std::size_t kHeaderBytes = 10;     // magic .. msgid
 inline constexpr std::size_t kChecksumBytes = 2;
 inline constexpr std::size_t kSignatureBytes = 13;  // never written (no signing), but a
@@ -40,6 +43,8 @@ using FrameSpan = std::span<std::uint8_t, kMaxFrameBytes>;  // a FrameBuffer con
 // ---- enum values used by this program (common.xml / minimal.xml) -----------------------
 inline constexpr std::uint8_t kMavTypeOnboardController = 18;           // MAV_TYPE
 inline constexpr std::uint8_t kMavAutopilotInvalid = 8;                 // MAV_AUTOPILOT: not an autopilot
+inline constexpr std::uint8_t kMavAutopilotArdupilotmega = 3;
+inline constexpr std::uint8_t kMavAutopilotPx4 = 12;
 inline constexpr std::uint8_t kMavStateStandby = 3;                     // MAV_STATE
 inline constexpr std::uint8_t kMavStateActive = 4;
 inline constexpr std::uint8_t kMavStateCritical = 5;
@@ -70,6 +75,25 @@ struct Heartbeat {  // #0
                                kSystemStatusOffset = 7, kMavlinkVersionOffset = 8;
 };
 static_assert(Heartbeat::kMavlinkVersionOffset + 1 == Heartbeat::kPayloadBytes);
+
+struct Timesync {  // #111, common.xml (time synchronisation protocol v2)
+  static constexpr std::uint32_t kId = 111;
+  static constexpr std::uint8_t kCrcExtra = 34;
+  static constexpr std::size_t kBasePayloadBytes = 16;  // tc1, ts1 (what v1 senders send)
+  static constexpr std::size_t kPayloadBytes = 18;
+
+  // [ns] 0 in a request; in a response, the responder's clock when it answered.
+  std::int64_t tc1 = 0;
+  // [ns] the requester's clock when it asked; a response echoes it unchanged.
+  std::int64_t ts1 = 0;
+  // Extensions: in a response, the requester's ids (0: broadcast, a v1 responder); in a
+  // request, whom it asks (0: anyone).
+  std::uint8_t target_system = 0;
+  std::uint8_t target_component = 0;
+
+  static constexpr std::size_t kTc1Offset = 0, kTs1Offset = 8, kTargetSystemOffset = 16, kTargetComponentOffset = 17;
+};
+static_assert(Timesync::kTargetComponentOffset + 1 == Timesync::kPayloadBytes);
 
 struct Odometry {  // #331, common.xml
   static constexpr std::uint32_t kId = 331;
@@ -133,8 +157,14 @@ static_assert(VisionPositionDelta::kConfidenceOffset + 4 == VisionPositionDelta:
 
 // ---- payloads: the full, untrimmed wire image of one message ---------------------------
 void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloadBytes> out);
+void pack_payload(const Timesync& m, std::span<std::uint8_t, Timesync::kPayloadBytes> out);
 void pack_payload(const Odometry& m, std::span<std::uint8_t, Odometry::kPayloadBytes> out);
 void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPositionDelta::kPayloadBytes> out);
+
+// The received messages, from a payload already zero-extended to at least the message's full
+// length (mavlink_parser.hpp hands out kMaxPayloadBytes).
+[[nodiscard]] Heartbeat unpack_heartbeat(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
+[[nodiscard]] Timesync unpack_timesync(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
 
 // ---- checksum ---------------------------------------------------------------------------
 inline constexpr std::uint16_t kCrcInit = 0xFFFF;
@@ -159,6 +189,7 @@ class Framer {
 
   // Write one complete frame at the start of `out`; returns its length in bytes.
   [[nodiscard]] std::size_t encode(const Heartbeat& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const Timesync& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const Odometry& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const VisionPositionDelta& m, FrameSpan out);
 

@@ -1,10 +1,12 @@
 #pragma once
-// The byte transports that carry encoded MAVLink 2 frames from the odometry program to the
-// flight computer: UDP (src/link/transport_udp.cpp) and a serial port (src/link/transport_serial.cpp), chosen
-// by a URI at start-up (src/link/transport.cpp).
+// The byte transports that carry encoded MAVLink 2 frames between the odometry program and
+// the flight computer: UDP to a fixed peer or listening for one (src/link/transport_udp.cpp)
+// and a serial port (src/link/transport_serial.cpp), chosen by a URI at start-up
+// (src/link/transport.cpp). Frames go out from the output thread (send) and come in on the
+// same socket or port on a receiver thread of their own (receive).
 //
 // The promise to the pipeline: send() never blocks and never throws, whatever the transport
-// is doing. A link that is down, a peer that is not listening, a full buffer or an unplugged
+// (or the receiver thread) is doing. A link that is down, a peer that is not listening, a full buffer or an unplugged
 // USB adapter cost a counted drop and a problem text, never a stalled output thread, and the
 // link recovers by itself when the far end comes back. Only construction throws (LinkError),
 // and only for configurations that waiting cannot fix.
@@ -41,6 +43,14 @@ enum class SendResult {
   Rejected,             // empty or longer than kMaxLinkFrameBytes; nothing was sent
 };
 
+// What one receive() call brought.
+struct ReceiveResult {
+  std::size_t bytes = 0;  // 0: nothing arrived within the timeout (or the link is down)
+  // UDP: the bytes are one whole datagram (frames never continue into the next one).
+  // Serial: a piece of the byte stream.
+  bool datagram = false;
+};
+
 // Counters since the link was opened. Every frame given to send() ends up in exactly one of
 // sent, dropped_queue_full, dropped_link_down, rejected or (serial) pending.
 struct LinkStats {
@@ -48,8 +58,9 @@ struct LinkStats {
   std::uint64_t bytes_sent = 0;   // the bytes of those frames
   // Serial: the queue was full and its oldest frame was discarded. UDP: EAGAIN or ENOBUFS.
   std::uint64_t frames_dropped_queue_full = 0;
-  // UDP: no route yet, or the send reported the peer's refusal. Serial: the frame being
-  // written when the device went away (frames queued meanwhile wait for it to return).
+  // UDP: no route yet, the send reported the peer's refusal, or (listening) no peer known yet.
+  // Serial: the frame being written when the device went away (frames queued meanwhile wait
+  // for it to return).
   std::uint64_t frames_dropped_link_down = 0;
   std::uint64_t frames_rejected = 0;  // empty or longer than kMaxLinkFrameBytes
   std::uint64_t frames_pending = 0;   // serial: in the queue or being written now
@@ -60,7 +71,9 @@ struct LinkStats {
   // Rises when the problem text changes, and at most about once a second while one problem
   // persists: log last_problem() when this moved, and the journal gets a rate-limited line.
   std::uint64_t problem_reports = 0;
-  bool link_up = false;  // serial: device open; UDP: connected and the last send succeeded
+  bool link_up = false;  // serial: device open; UDP: connected (listening: a peer known) and the last send succeeded
+  std::uint64_t bytes_received = 0;    // by receive()
+  std::uint64_t peer_changes = 0;      // UDP listening: times the reply address changed
 };
 
 class OutputLink {
@@ -79,12 +92,33 @@ class OutputLink {
   // times)"); empty if there has been none. It stays after recovery: see LinkStats::link_up.
   virtual std::string last_problem() const = 0;
   virtual std::string description() const = 0;  // "udp 192.168.2.1:14550", for the start-up log
+
+  // Waits up to timeout_ms for bytes from the far end and copies them into `into` (give room
+  // for kMaxDatagramBytes: a datagram that does not fit is cut). Call it from one thread, the
+  // link's receiver, never from the output thread; it never throws. A bounded timeout lets the
+  // receiver notice shutdown promptly.
+  virtual ReceiveResult receive(std::span<std::uint8_t> into, int timeout_ms) noexcept = 0;
+  // UDP listening mode: from now on send() goes to the sender of the datagram receive() last
+  // returned (call it once that datagram proved to hold a valid MAVLink frame). Elsewhere a no-op.
+  virtual void reply_to_last_sender() noexcept {}
+  // UDP listening mode: the current peer ("127.0.0.1:40123"), empty until one is known.
+  // Elsewhere empty.
+  virtual std::string peer() const { return {}; }
 };
 
+// The largest UDP payload: a receive buffer of this size never cuts a datagram.
+inline constexpr std::size_t kMaxDatagramBytes = 65507;
+
 struct UdpLinkOptions {
-  std::string host;  // IPv4 or IPv6 literal, or a host name (resolved once, when the link opens)
-  std::uint16_t port = 0;
-  std::uint16_t local_port = 0;  // 0: any; set it when the peer only accepts a known source port
+  // Sending to a fixed peer (udp://): IPv4 or IPv6 literal, or a host name (resolved once,
+  // when the link opens). Listening (udpin://): the local address to bind, empty for any IPv4
+  // address (0.0.0.0); "::" for any IPv6 address (and IPv4-mapped ones).
+  std::string host;
+  std::uint16_t port = 0;  // the peer's port, or (listening) the local port to bind
+  std::uint16_t local_port = 0;  // fixed peer only. 0: any; set it when the peer only accepts a known source port
+  // udpin://: bind host:port and reply to whoever sent the last valid MAVLink frame, as PX4 and
+  // MAVSDK do on their UDP ports (PX4 SITL's offboard API port is 14540).
+  bool listen = false;
 };
 
 // Supported rates (termios B* constants). Above 115200 check what the adapter and the flight
@@ -108,6 +142,7 @@ struct SerialLinkOptions {
 using LinkOptions = std::variant<UdpLinkOptions, SerialLinkOptions>;
 
 // udp://HOST:PORT, udp://[IPV6]:PORT, optionally ?local_port=N
+// udpin://[ADDR]:PORT (udpin://:14540, udpin://0.0.0.0:14540, udpin://[::]:14540)
 // serial:///dev/ttyUSB0[:BAUD], optionally ?queue_frames=N (the baud is a trailing ":DIGITS")
 // Throws LinkError naming the URI and what is wrong (unknown scheme, missing host or port,
 // port out of range, unsupported baud...).

@@ -1,0 +1,323 @@
+// The link both ways, against a simulated PX4 nobody here wrote (test/mavlink_check/
+// autopilot_sim.mjs, on node-mavlink) over real UDP (the program sending to a fixed peer, and
+// listening as PX4's offboard convention has it) and a real pseudo-terminal. The program runs
+// whole, on the virtual sensor (a live source, so capture times are on the steady clock), while
+// the simulator sends HEARTBEAT, TIMESYNC requests at PX4's 10 Hz and noise, corrupted,
+// truncated, reordered and lost frames. What must hold:
+//   - PX4's timesync estimator, run by the simulator on our answers, converges (500 samples)
+//     within 1 ms of the true offset (the simulator's clock is CLOCK_MONOTONIC + 1234.567 s);
+//   - every frame we sent still decodes and the ODOMETRY matches the odometry log field by
+//     field (decode.mjs and check.mjs, unchanged; TIMESYNC is the one message id added);
+//   - our own offset estimate finds the simulator's clock too, and the user is told the
+//     autopilot is there (and when it goes, and comes back).
+// No wall-clock deadline is asserted: waits are bounded timeouts, checks are counts and order.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <pty.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "rgbd_odometry/app/run.hpp"
+
+namespace rgbdo {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kCheckDir = RGBDO_MAVLINK_CHECK_DIR;
+// Recorded pace: the device clock then runs at the host's rate, so capture stamps are comparable with
+// arrival times (at another rate the virtual device's timestamps drift from the host's by design).
+constexpr double kRate = 1.0;
+constexpr long long kTrueOffsetNs = 1'234'567'000'000LL;  // the simulator's clock minus ours
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("rgbdo_autopilot_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+pid_t start_node(const std::string& script, const std::vector<std::string>& args, int inherit_fd) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (inherit_fd >= 0) ::dup2(inherit_fd, 3);
+    std::vector<std::string> all{"node", kCheckDir + "/" + script};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execvp("node", argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+bool wait_for_file(const fs::path& file, int seconds) {
+  for (int i = 0; i < seconds * 20 && !fs::exists(file); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  return fs::exists(file);
+}
+
+std::string read_text(const fs::path& file) {
+  std::ifstream in(file);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+int wait_exit(pid_t pid, int seconds) {
+  int status = 0;
+  for (int i = 0; i < seconds * 20; ++i) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  return -1;
+}
+
+// A number from the simulator's JSON result ("key": value), NaN when absent or null.
+double json_number(const std::string& json, const std::string& key) {
+  const std::regex re("\"" + key + "\": (-?[0-9.eE+-]+)");
+  std::smatch m;
+  return std::regex_search(json, m, re) ? std::stod(m[1]) : std::nan("");
+}
+
+// A port nothing listens on now (for the listening link; the simulator needs it first).
+int free_udp_port() {
+  const int s = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(s, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t length = sizeof a;
+  ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &length);
+  ::close(s);
+  return ntohs(a.sin_port);
+}
+
+struct ProgramRun {
+  int rc = -1;
+  std::string output;
+};
+
+// The program on the virtual sensor, until stop_when() or `limit_s`. The recording plays once
+// (40 frames); afterwards the sensor stays away and the program waits for it, link running.
+ProgramRun run_program(const std::string& link, const fs::path& log, const std::string& device_id,
+                       const std::function<bool()>& stop_when, int limit_s,
+                       const std::vector<std::string>& extra_overrides = {}) {
+  RunOptions o;
+  o.source = std::string("openni://rgbdo-virtual:") + RGBDO_TEST_DATA_DIR + "?rate=" + std::to_string(kRate) +
+             "&id=" + device_id;
+  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
+  o.log_path = log.string();
+  o.link = link;
+  o.overrides = {"link.vision_position_delta=true", "sensor.reconnect_timeout_s=-1",
+                 "sensor.reconnect_interval_ms=500",
+                 "sensor.pairing_wait_ms=" + std::to_string(static_cast<int>(100 / kRate))};
+  o.overrides.insert(o.overrides.end(), extra_overrides.begin(), extra_overrides.end());
+  o.quiet = true;
+  ProgramRun run;
+  std::ostringstream out, err;
+  std::atomic<bool> done{false};
+  std::thread program([&] {
+    run.rc = run_odometry(o, out, err);
+    done = true;
+  });
+  const auto start = std::chrono::steady_clock::now();
+  while (!done) {
+    if (stop_when() || std::chrono::steady_clock::now() - start > std::chrono::seconds(limit_s)) request_stop();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  program.join();
+  run.output = out.str() + err.str();
+  return run;
+}
+
+int log_rows(const fs::path& log) {
+  std::ifstream in(log);
+  int rows = -1;  // the header
+  for (std::string line; std::getline(in, line);) ++rows;
+  return rows;
+}
+
+// decode.mjs over the captured bytes, then check.mjs against the log, as for the send-only link.
+void expect_capture_matches_log(const fs::path& dir) {
+  const std::string decode = "node " + kCheckDir + "/decode.mjs --file " + (dir / "capture.bin").string() + " --out " +
+                             (dir / "decoded.jsonl").string() + " > " + (dir / "decode.txt").string() + " 2>&1";
+  const int decode_rc = std::system(decode.c_str());
+  EXPECT_EQ(WIFEXITED(decode_rc) ? WEXITSTATUS(decode_rc) : 128, 0)
+      << "every frame we sent decodes: " << read_text(dir / "decode.txt");
+  const std::string check = "node " + kCheckDir + "/check.mjs --decoded " + (dir / "decoded.jsonl").string() +
+                            " --log " + (dir / "odometry.csv").string() +
+                            " --expect-vpd --velocity-frame current --jacobians exact --allow-msgid 111 > " +
+                            (dir / "check.txt").string() + " 2>&1";
+  const int check_rc = std::system(check.c_str());
+  EXPECT_EQ(WIFEXITED(check_rc) ? WEXITSTATUS(check_rc) : 128, 0) << read_text(dir / "check.txt");
+}
+
+// Our estimate of the simulator's clock, from the status line: "clock offset +1234.567000123 s".
+double our_offset_error_us(const std::string& output) {
+  const std::regex re("link status: .*clock offset ([-+][0-9]+\\.[0-9]{9}) s");
+  std::smatch m;
+  std::string last;
+  for (auto it = std::sregex_iterator(output.begin(), output.end(), re); it != std::sregex_iterator(); ++it)
+    last = (*it)[1];
+  if (last.empty()) return std::nan("");
+  return (std::stod(last) - static_cast<double>(kTrueOffsetNs) * 1e-9) * 1e6;
+}
+
+// GIVEN the simulator on `transport_args`, WHEN the program runs until PX4 converged,
+// THEN convergence within 1 ms, unchanged ODOMETRY, and the user told.
+void converge_over(const std::string& name, const std::function<std::string(const fs::path&)>& link_for,
+                   const std::vector<std::string>& transport_args, int inherit_fd, const std::function<void()>& after_start,
+                   const std::function<void()>& after_run = [] {}) {
+  ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink")) << "run: npm ci --prefix test/mavlink_check";
+  const fs::path dir = scratch(name);
+  std::vector<std::string> args = transport_args;
+  const std::vector<std::string> common{"--ready-file", (dir / "ready").string(), "--result", (dir / "result.json").string(),
+                                        "--capture", (dir / "capture.bin").string(), "--converged-file",
+                                        (dir / "converged").string(), "--offset-ns", std::to_string(kTrueOffsetNs),
+                                        "--expect-converged", "--loss", "0.05", "--reorder", "0.03", "--garbage", "0.3",
+                                        "--seed", "7", "--idle-exit-ms", "3000", "--max-ms", "400000"};
+  args.insert(args.end(), common.begin(), common.end());
+  const pid_t sim = start_node("autopilot_sim.mjs", args, inherit_fd);
+  after_start();
+  ASSERT_TRUE(wait_for_file(dir / "ready", 30)) << "simulator not ready";
+  const std::string link = link_for(dir);
+  // 500 used samples at 10 Hz take 50 s and more: the limit only ends a run that never converges.
+  const ProgramRun run =
+      run_program(link, dir / "odometry.csv", name, [&] { return fs::exists(dir / "converged"); }, 300);
+  after_run();
+  ASSERT_EQ(run.rc, 0) << run.output;
+  const int sim_rc = wait_exit(sim, 60);
+  const std::string result = read_text(dir / "result.json");
+  EXPECT_EQ(sim_rc, 0) << result;
+
+  // PX4's view: converged, within 1 ms of the truth, every answer causal.
+  EXPECT_GE(json_number(result, "sequence"), 500) << result;
+  const double error_us = json_number(result, "offsetErrorUs");
+  EXPECT_LT(std::abs(error_us), 1000) << result;
+  EXPECT_EQ(json_number(result, "causalityViolations"), 0) << result;
+  EXPECT_GT(json_number(result, "garbageBytes"), 0) << "the link was unkind: " << result;
+  EXPECT_GT(json_number(result, "corruptFrames"), 0) << result;
+  // Its converged offset carries our capture times onto its clock: each ODOMETRY stamp lands
+  // near its arrival, within the device clock's mapping error (sensor/device_clock.cpp: it can
+  // put a stamp tens of ms late on a loaded machine) and the pipeline's latency. Seconds off
+  // would mean another clock (the dataset's, or an offset gone wrong).
+  const std::regex latency("\"odometryLatencyUs\": \\{\\s*\"min\": (-?[0-9.e+-]+),\\s*\"max\": (-?[0-9.e+-]+)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(result, m, latency)) << result;
+  EXPECT_GT(std::stod(m[1]), -1e6) << "a stamp long after its arrival: " << result;
+  EXPECT_LT(std::stod(m[2]), 5e6) << result;
+  std::cout << "[ " << name << " ] PX4 estimator: " << json_number(result, "sequence") << " samples, offset error "
+            << error_us << " us; ODOMETRY capture-to-arrival " << std::stod(m[1]) / 1000 << ".."
+            << std::stod(m[2]) / 1000 << " ms\n";
+
+  // Nothing lost from the log or the wire.
+  EXPECT_EQ(json_number(result, "odometry"), log_rows(dir / "odometry.csv")) << result;
+  expect_capture_matches_log(dir);
+
+  // The user was told, and our own estimate found the simulator's clock too.
+  EXPECT_NE(run.output.find("link: autopilot PX4 (system 1, component 1) heard"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("link: clock offset to the autopilot +1234.5"), std::string::npos) << run.output;
+  const double ours_us = our_offset_error_us(run.output);
+  EXPECT_LT(std::abs(ours_us), 1000) << run.output;
+  std::cout << "[ " << name << " ] our estimate of the autopilot's clock: error " << ours_us << " us\n";
+}
+
+TEST(FlightLinkAutopilot, OverUdpToAFixedPeerPx4ConvergesAndOdometryIsUnchanged) {
+  converge_over(
+      "udp", [](const fs::path& dir) {
+        const std::string ready = read_text(dir / "ready");  // "READY udp 127.0.0.1:PORT"
+        return "udp://127.0.0.1:" + std::to_string(std::stoi(ready.substr(ready.rfind(':') + 1)));
+      },
+      {"--udp-listen", "0"}, -1, [] {});
+}
+
+TEST(FlightLinkAutopilot, ListeningOnUdpPx4ConvergesAndOdometryIsUnchanged) {
+  const int port = free_udp_port();
+  converge_over(
+      "udpin", [port](const fs::path&) { return "udpin://127.0.0.1:" + std::to_string(port); },
+      {"--udp-send", "127.0.0.1:" + std::to_string(port)}, -1, [] {});
+}
+
+TEST(FlightLinkAutopilot, OverAPseudoTerminalPx4ConvergesAndOdometryIsUnchanged) {
+  int master = -1, slave = -1;
+  char slave_path[256] = {};
+  ASSERT_EQ(::openpty(&master, &slave, slave_path, nullptr, nullptr), 0) << std::strerror(errno);
+  termios raw{};
+  ::tcgetattr(master, &raw);
+  ::cfmakeraw(&raw);
+  ::tcsetattr(master, TCSANOW, &raw);
+  const std::string path = slave_path;
+  converge_over(
+      "pty", [path](const fs::path&) { return "serial://" + path + ":921600"; }, {"--fd", "3"}, master,
+      [&] { ::close(master); }, [&] { ::close(slave); });  // the program is done: the simulator reads the end
+}
+
+// A peer that appears late, goes away and comes back: the listening link has nobody to send to
+// until the first valid frame, then answers it; the autopilot's departure and return are news.
+TEST(FlightLinkAutopilot, ALatePeerIsFoundAndAVanishedAutopilotIsReported) {
+  ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink"));
+  const fs::path dir = scratch("late");
+  const int port = free_udp_port();
+  // The simulator speaks after 3 s, goes quiet after 20 used answers for as long as the
+  // program sends 4 heartbeats (>= 3 s of silence, the timeout is 1.5 s), speaks again and
+  // leaves after 3 more.
+  const pid_t sim = start_node("autopilot_sim.mjs",
+                               {"--udp-send", "127.0.0.1:" + std::to_string(port), "--start-after-ms", "3000",
+                                "--ready-file", (dir / "ready").string(), "--result", (dir / "result.json").string(),
+                                "--capture", (dir / "capture.bin").string(), "--silent-after-answers", "20",
+                                "--silent-for-heartbeats", "4", "--exit-after-heartbeats", "3", "--garbage", "0.2",
+                                "--idle-exit-ms", "5000", "--max-ms", "120000"},
+                               -1);
+  ASSERT_TRUE(wait_for_file(dir / "ready", 30));
+  std::atomic<bool> sim_done{false};
+  int sim_rc = -1;
+  std::thread waiter([&] {
+    sim_rc = wait_exit(sim, 150);
+    sim_done = true;
+  });
+  const ProgramRun run = run_program("udpin://127.0.0.1:" + std::to_string(port), dir / "odometry.csv", "late",
+                                     [&] { return sim_done.load(); }, 150);
+  waiter.join();
+  ASSERT_EQ(run.rc, 0) << run.output;
+  const std::string result = read_text(dir / "result.json");
+  EXPECT_EQ(sim_rc, 0) << result;
+  EXPECT_EQ(json_number(result, "silentPeriods"), 1) << result;
+
+  // The news, in order: a peer, the autopilot, its departure, its return.
+  const std::string& out = run.output;
+  const auto peer = out.find("link: replying to 127.0.0.1:");
+  const auto heard = out.find("link: autopilot PX4 (system 1, component 1) heard");
+  const auto gone = out.find("link: autopilot PX4 (system 1, component 1) gone: nothing heard from it for ");
+  const auto back = gone == std::string::npos ? gone : out.find("link: autopilot PX4 (system 1, component 1) up", gone);
+  ASSERT_NE(peer, std::string::npos) << out;
+  ASSERT_NE(heard, std::string::npos) << out;
+  ASSERT_NE(gone, std::string::npos) << out;
+  ASSERT_NE(back, std::string::npos) << out;
+  EXPECT_LT(peer, heard) << out;
+  EXPECT_LT(heard, gone) << out;
+  // What the peer got decodes cleanly (the frames sent before it was known were dropped).
+  const std::string decode = "node " + kCheckDir + "/decode.mjs --file " + (dir / "capture.bin").string() + " --out " +
+                             (dir / "decoded.jsonl").string() + " > " + (dir / "decode.txt").string() + " 2>&1";
+  const int decode_rc = std::system(decode.c_str());
+  EXPECT_EQ(WIFEXITED(decode_rc) ? WEXITSTATUS(decode_rc) : 128, 0) << read_text(dir / "decode.txt");
+  std::cout << run.output;
+}
+
+}  // namespace
+}  // namespace rgbdo
