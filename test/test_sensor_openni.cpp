@@ -143,8 +143,12 @@ TEST(OpenNiSource, ARecordingPlaysBackThroughOniFile) {
     OpenNiSource source(o);
     std::string problem;
     live = capture(source, problem);
+    // The recorder takes every frame the sensor sends; a reader woken late on a loaded machine
+    // may miss one (counted), the file does not.
+    EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
   }
-  ASSERT_EQ(live.size(), 40u);
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  ASSERT_EQ(seq.frames.size(), 40u);
 
   // WHEN the file is played back through OpenNI2's own file driver
   OpenNiSource playback(options_for(path));
@@ -152,15 +156,18 @@ TEST(OpenNiSource, ARecordingPlaysBackThroughOniFile) {
   std::string problem;
   const auto played = capture(playback, problem);
 
-  // THEN every colour frame comes back, pixel for pixel, at the recorded intervals
-  ASSERT_EQ(played.size(), live.size()) << problem;
+  // THEN every colour frame of the recording comes back, pixel for pixel (as the sensor sent
+  // it: the recording's colour image), at the recorded intervals (the device clock's 1 us)
+  ASSERT_EQ(played.size(), seq.frames.size()) << problem;
   EXPECT_EQ(playback.dropped_colour_frames(), 0);
   const std::vector<cv::Mat> depth_frames = recorded_depth_frames_m();
   ASSERT_EQ(depth_frames.size(), 41u);
-  for (size_t i = 0; i < live.size(); ++i) {
-    EXPECT_EQ(cv::countNonZero(played[i].gray != live[i].gray), 0) << "frame " << i;
+  for (size_t i = 0; i < played.size(); ++i) {
+    const RgbdFrame recorded_frame = load_tum_frame(seq.frames[i], 5000, 640, 480);
+    EXPECT_EQ(cv::countNonZero(played[i].gray != recorded_frame.gray), 0) << "frame " << i;
     if (i > 0) {
-      EXPECT_EQ(played[i].t_colour_ns - played[i - 1].t_colour_ns, live[i].t_colour_ns - live[i - 1].t_colour_ns)
+      EXPECT_NEAR(static_cast<double>(played[i].t_colour_ns - played[i - 1].t_colour_ns),
+                  static_cast<double>(seq.frames[i].t_colour_ns - seq.frames[i - 1].t_colour_ns), 1000.0)
           << "frame " << i;
     }
     // AND its depth is a recorded depth frame, bit for bit (the 16z codec is lossless), within
