@@ -23,6 +23,7 @@
 
 #include <gtest/gtest.h>
 
+#include "loopback_udp.hpp"
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/link/flight_link.hpp"
 #include "rgbd_odometry/link/transport.hpp"
@@ -54,16 +55,8 @@ long allocations_during(Run run) {
 }
 
 TEST(LinkAllocations, UdpSendToARefusingPeerAllocatesNothing) {
-  int probe = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof a;
-  ::bind(probe, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  ::getsockname(probe, reinterpret_cast<sockaddr*>(&a), &length);
-  ::close(probe);  // nothing listens on that port now
-
-  const auto link = open_link("udp://127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
+  // Nothing listens on that port now.
+  const auto link = open_link("udp://127.0.0.1:" + std::to_string(unused_loopback_udp_port()));
   const long n = allocations_during([&] {
     for (int i = 0; i < 1000; ++i) link->send(g_frame);
   });
@@ -93,15 +86,10 @@ TEST(LinkAllocations, SerialSendToAPeerThatDoesNotReadAllocatesNothing) {
 // The receiver: a flood of TIMESYNC requests (each answered at once, from the receiver
 // thread), heartbeats and noise costs no allocation once the link is up.
 TEST(LinkAllocations, ReceiverAnsweringAFloodAllocatesNothing) {
-  const int peer = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof a;
-  ::bind(peer, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  ::getsockname(peer, reinterpret_cast<sockaddr*>(&a), &length);
+  const LoopbackUdpSocket autopilot = bind_loopback_udp();
+  const int peer = autopilot.fd;
   Config config;
-  config.link.uri = "udp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  config.link.uri = "udp://127.0.0.1:" + std::to_string(autopilot.port);
   FlightLink flight(config);
   flight.tick(0);  // the heartbeat tells us the link's source address
   sockaddr_in from{};

@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "loopback_udp.hpp"
 #include "rgbd_odometry/link/transport.hpp"
 #include "link_test_frames.hpp"
 
@@ -226,14 +227,10 @@ TEST(UdpLink, EmptyAndOversizedFramesAreRejectedAndCounted) {
 // udpin: nobody to send to until a datagram arrives and is confirmed as MAVLink
 // (reply_to_last_sender), then its sender gets the frames; a second sender takes over.
 TEST(UdpInLink, SendsNothingUntilAPeerSpeaksThenAnswersTheLastOne) {
-  int probe = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
+  sockaddr_in a{};  // where the link listens
   a.sin_family = AF_INET;
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof a;
-  ::bind(probe, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  ::getsockname(probe, reinterpret_cast<sockaddr*>(&a), &length);
-  ::close(probe);
+  a.sin_port = htons(unused_loopback_udp_port());
   const auto link = open_link("udpin://127.0.0.1:" + std::to_string(ntohs(a.sin_port)));
   const std::vector<std::uint8_t> frame(40, 0xAB);
   EXPECT_EQ(link->send(frame), SendResult::DroppedLinkDown);

@@ -48,32 +48,35 @@ std::string numeric_address(const sockaddr_storage& a, socklen_t length) {
   return text;
 }
 
-// Once, at open: getaddrinfo may wait for DNS, which the output thread must never do.
-PeerAddress resolve(const UdpLinkOptions& o, const std::string& name) {
+// Once, at open: getaddrinfo may wait for DNS, which the output thread must never do. `what`
+// names the address in the error ("host", "local address"); `flags` adds AI_PASSIVE for a
+// local one. IPv4 first: MAVLink endpoints (mavlink-router, PX4 SITL, QGroundControl) listen
+// on IPv4 by default, and "localhost" often resolves to ::1 first.
+PeerAddress look_up(const UdpLinkOptions& o, const std::string& name, const char* what, int flags) {
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_DGRAM;
-  hints.ai_flags = AI_NUMERICSERV;
+  hints.ai_flags = AI_NUMERICSERV | flags;
   addrinfo* list = nullptr;
   const int rc = getaddrinfo(o.host.c_str(), std::to_string(o.port).c_str(), &hints, &list);
   if (rc != 0) {
     const std::string why = rc == EAI_SYSTEM ? link_detail::errno_text(errno) : gai_strerror(rc);
-    throw LinkError(name + ": cannot resolve host '" + o.host + "': " + why);
+    throw LinkError(name + ": cannot resolve " + what + " '" + o.host + "': " + why);
   }
-  // IPv4 first: MAVLink endpoints (mavlink-router, PX4 SITL, QGroundControl) listen on IPv4 by
-  // default, and "localhost" often resolves to ::1 first.
   const addrinfo* chosen = list;
   for (const addrinfo* a = list; a != nullptr; a = a->ai_next)
     if (a->ai_family == AF_INET) {
       chosen = a;
       break;
     }
-  PeerAddress peer;
-  std::memcpy(&peer.address, chosen->ai_addr, chosen->ai_addrlen);
-  peer.length = chosen->ai_addrlen;
+  PeerAddress address;
+  std::memcpy(&address.address, chosen->ai_addr, chosen->ai_addrlen);
+  address.length = chosen->ai_addrlen;
   freeaddrinfo(list);
-  return peer;
+  return address;
 }
+
+PeerAddress resolve(const UdpLinkOptions& o, const std::string& name) { return look_up(o, name, "host", 0); }
 
 // connect() failures that mean "the network is not up yet" rather than "this cannot work".
 bool network_not_ready(int err) {
@@ -254,26 +257,7 @@ PeerAddress resolve_local(const UdpLinkOptions& o, const std::string& name) {
     local.length = sizeof a;
     return local;
   }
-  addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
-  hints.ai_socktype = SOCK_DGRAM;
-  hints.ai_flags = AI_NUMERICSERV | AI_PASSIVE;
-  addrinfo* list = nullptr;
-  const int rc = getaddrinfo(o.host.c_str(), std::to_string(o.port).c_str(), &hints, &list);
-  if (rc != 0) {
-    const std::string why = rc == EAI_SYSTEM ? link_detail::errno_text(errno) : gai_strerror(rc);
-    throw LinkError(name + ": cannot resolve local address '" + o.host + "': " + why);
-  }
-  const addrinfo* chosen = list;
-  for (const addrinfo* a = list; a != nullptr; a = a->ai_next)
-    if (a->ai_family == AF_INET) {
-      chosen = a;
-      break;
-    }
-  std::memcpy(&local.address, chosen->ai_addr, chosen->ai_addrlen);
-  local.length = chosen->ai_addrlen;
-  freeaddrinfo(list);
-  return local;
+  return look_up(o, name, "local address", AI_PASSIVE);
 }
 
 class UdpListenLink final : public OutputLink {
