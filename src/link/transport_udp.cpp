@@ -83,6 +83,30 @@ bool network_not_ready(int err) {
   return err == ENETUNREACH || err == EHOSTUNREACH || err == ENETDOWN || err == EADDRNOTAVAIL;
 }
 
+// The counters both UDP links keep (read by stats() from any thread while the output thread
+// and the receiver count).
+struct UdpCounters {
+  std::atomic<std::uint64_t> sent{0}, bytes{0}, dropped_queue_full{0}, dropped_link_down{0}, rejected{0}, errors{0},
+      reconnects{0}, bytes_received{0}, peer_changes{0};
+  std::atomic<bool> up{false};
+
+  LinkStats snapshot(const LinkProblem& problem) const {
+    LinkStats s;
+    s.frames_sent = sent.load(std::memory_order_relaxed);
+    s.bytes_sent = bytes.load(std::memory_order_relaxed);
+    s.frames_dropped_queue_full = dropped_queue_full.load(std::memory_order_relaxed);
+    s.frames_dropped_link_down = dropped_link_down.load(std::memory_order_relaxed);
+    s.frames_rejected = rejected.load(std::memory_order_relaxed);
+    s.errors = errors.load(std::memory_order_relaxed);
+    s.reconnects = reconnects.load(std::memory_order_relaxed);
+    s.problem_reports = problem.reports();
+    s.link_up = up.load(std::memory_order_relaxed);
+    s.bytes_received = bytes_received.load(std::memory_order_relaxed);
+    s.peer_changes = peer_changes.load(std::memory_order_relaxed);
+    return s;
+  }
+};
+
 class UdpLink final : public OutputLink {
  public:
   explicit UdpLink(const UdpLinkOptions& o)
@@ -111,49 +135,36 @@ class UdpLink final : public OutputLink {
 
   SendResult send(std::span<const std::uint8_t> frame) noexcept override {
     if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
-      rejected_.fetch_add(1, std::memory_order_relaxed);
+      counters_.rejected.fetch_add(1, std::memory_order_relaxed);
       problem_.report("frame rejected: empty or longer than 280 bytes", 0, false);
       return SendResult::Rejected;
     }
     if (!connected_ && !retry_connect()) {
-      dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
+      counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
       return SendResult::DroppedLinkDown;
     }
     const ssize_t n = ::send(fd_, frame.data(), frame.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
     if (n == static_cast<ssize_t>(frame.size())) {
-      sent_.fetch_add(1, std::memory_order_relaxed);
-      bytes_.fetch_add(frame.size(), std::memory_order_relaxed);
-      up_.store(true, std::memory_order_relaxed);
+      counters_.sent.fetch_add(1, std::memory_order_relaxed);
+      counters_.bytes.fetch_add(frame.size(), std::memory_order_relaxed);
+      counters_.up.store(true, std::memory_order_relaxed);
       return SendResult::Sent;
     }
     const int err = n < 0 ? errno : EMSGSIZE;  // a datagram goes whole or not at all
     if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
-      dropped_queue_full_.fetch_add(1, std::memory_order_relaxed);
+      counters_.dropped_queue_full.fetch_add(1, std::memory_order_relaxed);
       problem_.report("socket send buffer full, frame dropped", err, false);
       return SendResult::DroppedBufferFull;
     }
-    errors_.fetch_add(1, std::memory_order_relaxed);
-    dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
-    up_.store(false, std::memory_order_relaxed);
+    counters_.errors.fetch_add(1, std::memory_order_relaxed);
+    counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
+    counters_.up.store(false, std::memory_order_relaxed);
     problem_.report(err == ECONNREFUSED ? "peer refused a datagram (nothing listening on its port?)" : "send failed",
                     err, false);
     return SendResult::DroppedLinkDown;
   }
 
-  LinkStats stats() const override {
-    LinkStats s;
-    s.frames_sent = sent_.load(std::memory_order_relaxed);
-    s.bytes_sent = bytes_.load(std::memory_order_relaxed);
-    s.frames_dropped_queue_full = dropped_queue_full_.load(std::memory_order_relaxed);
-    s.frames_dropped_link_down = dropped_link_down_.load(std::memory_order_relaxed);
-    s.frames_rejected = rejected_.load(std::memory_order_relaxed);
-    s.errors = errors_.load(std::memory_order_relaxed);
-    s.reconnects = reconnects_.load(std::memory_order_relaxed);
-    s.problem_reports = problem_.reports();
-    s.link_up = up_.load(std::memory_order_relaxed);
-    s.bytes_received = bytes_received_.load(std::memory_order_relaxed);
-    return s;
-  }
+  LinkStats stats() const override { return counters_.snapshot(problem_); }
 
   std::string last_problem() const override { return problem_.text(); }
   std::string description() const override { return description_; }
@@ -167,13 +178,13 @@ class UdpLink final : public OutputLink {
       // The refusal the ICMP "port unreachable" reports goes to whichever call on the socket
       // comes first; when that is this one, it is reported here as send() would have.
       if (errno == ECONNREFUSED) {
-        errors_.fetch_add(1, std::memory_order_relaxed);
-        up_.store(false, std::memory_order_relaxed);
+        counters_.errors.fetch_add(1, std::memory_order_relaxed);
+        counters_.up.store(false, std::memory_order_relaxed);
         problem_.report("peer refused a datagram (nothing listening on its port?)", ECONNREFUSED);
       }
       return {};
     }
-    bytes_received_.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+    counters_.bytes_received.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
     return {static_cast<std::size_t>(n), true};
   }
 
@@ -203,12 +214,12 @@ class UdpLink final : public OutputLink {
   void connect_at_open() {
     if (::connect(fd_, reinterpret_cast<const sockaddr*>(&peer_), peer_length_) == 0) {
       connected_ = true;
-      up_.store(true, std::memory_order_relaxed);
+      counters_.up.store(true, std::memory_order_relaxed);
       return;
     }
     const int err = errno;
     if (!network_not_ready(err)) throw LinkError(name_ + ": cannot connect: " + link_detail::errno_text(err));
-    errors_.fetch_add(1, std::memory_order_relaxed);
+    counters_.errors.fetch_add(1, std::memory_order_relaxed);
     problem_.report("no route to the peer yet; retrying every 0.5 s", err);
     next_connect_ns_ = steady_now_ns() + kConnectRetryInterval_ns;
   }
@@ -219,10 +230,10 @@ class UdpLink final : public OutputLink {
     next_connect_ns_ = now_ns + kConnectRetryInterval_ns;
     if (::connect(fd_, reinterpret_cast<const sockaddr*>(&peer_), peer_length_) == 0) {
       connected_ = true;
-      reconnects_.fetch_add(1, std::memory_order_relaxed);
+      counters_.reconnects.fetch_add(1, std::memory_order_relaxed);
       return true;
     }
-    errors_.fetch_add(1, std::memory_order_relaxed);
+    counters_.errors.fetch_add(1, std::memory_order_relaxed);
     problem_.report("no route to the peer yet; retrying every 0.5 s", errno, false);
     return false;
   }
@@ -235,10 +246,7 @@ class UdpLink final : public OutputLink {
   // Touched by send() only, hence by one thread.
   bool connected_ = false;
   std::int64_t next_connect_ns_ = 0;
-  // Read by stats() from any thread.
-  std::atomic<std::uint64_t> sent_{0}, bytes_{0}, dropped_queue_full_{0}, dropped_link_down_{0}, rejected_{0},
-      errors_{0}, reconnects_{0}, bytes_received_{0};
-  std::atomic<bool> up_{false};
+  UdpCounters counters_;
   LinkProblem problem_;
 };
 
@@ -288,7 +296,7 @@ class UdpListenLink final : public OutputLink {
 
   SendResult send(std::span<const std::uint8_t> frame) noexcept override {
     if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
-      rejected_.fetch_add(1, std::memory_order_relaxed);
+      counters_.rejected.fetch_add(1, std::memory_order_relaxed);
       problem_.report("frame rejected: empty or longer than 280 bytes", 0, false);
       return SendResult::Rejected;
     }
@@ -301,26 +309,26 @@ class UdpListenLink final : public OutputLink {
       peer_length = peer_length_;
     }
     if (peer_length == 0) {  // until someone speaks MAVLink to us there is nobody to send to
-      dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
+      counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
       return SendResult::DroppedLinkDown;
     }
     const ssize_t n = ::sendto(fd_, frame.data(), frame.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
                                reinterpret_cast<const sockaddr*>(&peer), peer_length);
     if (n == static_cast<ssize_t>(frame.size())) {
-      sent_.fetch_add(1, std::memory_order_relaxed);
-      bytes_.fetch_add(frame.size(), std::memory_order_relaxed);
-      up_.store(true, std::memory_order_relaxed);
+      counters_.sent.fetch_add(1, std::memory_order_relaxed);
+      counters_.bytes.fetch_add(frame.size(), std::memory_order_relaxed);
+      counters_.up.store(true, std::memory_order_relaxed);
       return SendResult::Sent;
     }
     const int err = n < 0 ? errno : EMSGSIZE;
     if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
-      dropped_queue_full_.fetch_add(1, std::memory_order_relaxed);
+      counters_.dropped_queue_full.fetch_add(1, std::memory_order_relaxed);
       problem_.report("socket send buffer full, frame dropped", err, false);
       return SendResult::DroppedBufferFull;
     }
-    errors_.fetch_add(1, std::memory_order_relaxed);
-    dropped_link_down_.fetch_add(1, std::memory_order_relaxed);
-    up_.store(false, std::memory_order_relaxed);
+    counters_.errors.fetch_add(1, std::memory_order_relaxed);
+    counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
+    counters_.up.store(false, std::memory_order_relaxed);
     problem_.report("send failed", err, false);
     return SendResult::DroppedLinkDown;
   }
@@ -335,7 +343,7 @@ class UdpListenLink final : public OutputLink {
     if (n < 0) return {};
     last_from_ = from;
     last_from_length_ = from_length;
-    bytes_received_.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
+    counters_.bytes_received.fetch_add(static_cast<std::uint64_t>(n), std::memory_order_relaxed);
     return {static_cast<std::size_t>(n), true};
   }
 
@@ -353,8 +361,8 @@ class UdpListenLink final : public OutputLink {
     peer_ = current_;
     peer_length_ = current_length_;
     peer_text_.swap(text);
-    peer_changes_.fetch_add(1, std::memory_order_relaxed);
-    up_.store(true, std::memory_order_relaxed);
+    counters_.peer_changes.fetch_add(1, std::memory_order_relaxed);
+    counters_.up.store(true, std::memory_order_relaxed);
   }
 
   std::string peer() const override {
@@ -362,20 +370,7 @@ class UdpListenLink final : public OutputLink {
     return peer_text_;
   }
 
-  LinkStats stats() const override {
-    LinkStats s;
-    s.frames_sent = sent_.load(std::memory_order_relaxed);
-    s.bytes_sent = bytes_.load(std::memory_order_relaxed);
-    s.frames_dropped_queue_full = dropped_queue_full_.load(std::memory_order_relaxed);
-    s.frames_dropped_link_down = dropped_link_down_.load(std::memory_order_relaxed);
-    s.frames_rejected = rejected_.load(std::memory_order_relaxed);
-    s.errors = errors_.load(std::memory_order_relaxed);
-    s.problem_reports = problem_.reports();
-    s.link_up = up_.load(std::memory_order_relaxed);
-    s.bytes_received = bytes_received_.load(std::memory_order_relaxed);
-    s.peer_changes = peer_changes_.load(std::memory_order_relaxed);
-    return s;
-  }
+  LinkStats stats() const override { return counters_.snapshot(problem_); }
 
   std::string last_problem() const override { return problem_.text(); }
   std::string description() const override { return description_; }
@@ -397,9 +392,7 @@ class UdpListenLink final : public OutputLink {
   sockaddr_storage peer_{};
   socklen_t peer_length_ = 0;  // 0: no peer yet
   std::string peer_text_;
-  std::atomic<std::uint64_t> sent_{0}, bytes_{0}, dropped_queue_full_{0}, dropped_link_down_{0}, rejected_{0},
-      errors_{0}, bytes_received_{0}, peer_changes_{0};
-  std::atomic<bool> up_{false};
+  UdpCounters counters_;
   LinkProblem problem_;
 };
 
