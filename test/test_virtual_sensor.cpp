@@ -59,7 +59,8 @@ class VirtualSensor : public ::testing::Test {
       if (ready == 0) {
         c.indices.push_back(frame.getFrameIndex());
         c.timestamps_us.push_back(frame.getTimestamp());
-        c.arrival_s.push_back(elapsed);
+        // When the frame was read (after the wait, not when the wait began).
+        c.arrival_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
         if (c.first_colour.empty())
           c.first_colour = cv::Mat(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                                    static_cast<size_t>(frame.getStrideInBytes())).clone();
