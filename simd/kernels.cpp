@@ -14,13 +14,13 @@ namespace {
 // Best first; the scalar reference always last.
 constexpr KernelSet kSets[] = {
 #if defined(RGBDO_X86_KERNELS)
-    {"avx2", nearest_two_hamming_avx2, perturbation_sums_avx2, score_rigid_avx2, fast9_row_avx2},
-    {"sse42", nearest_two_hamming_popcnt, perturbation_sums_scalar, score_rigid_scalar, fast9_row_scalar},
+    {"avx2", nearest_two_hamming_avx2, hamming_rows_popcnt, perturbation_sums_avx2, score_rigid_avx2, fast9_row_avx2},
+    {"sse42", nearest_two_hamming_popcnt, hamming_rows_popcnt, perturbation_sums_scalar, score_rigid_scalar, fast9_row_scalar},
 #endif
 #if defined(RGBDO_NEON_KERNELS)
-    {"neon", nearest_two_hamming_neon, perturbation_sums_neon, score_rigid_neon, fast9_row_neon},
+    {"neon", nearest_two_hamming_neon, hamming_rows_neon, perturbation_sums_neon, score_rigid_neon, fast9_row_neon},
 #endif
-    {"scalar", nearest_two_hamming_scalar, perturbation_sums_scalar, score_rigid_scalar, fast9_row_scalar},
+    {"scalar", nearest_two_hamming_scalar, hamming_rows_scalar, perturbation_sums_scalar, score_rigid_scalar, fast9_row_scalar},
 };
 
 }  // namespace

@@ -46,6 +46,12 @@ inline void nearest_two(const std::uint8_t* query, int n_query, std::size_t quer
   }
 }
 
+inline void hamming_rows(const std::uint8_t* query, const std::uint8_t* train, std::size_t train_stride, const int* rows,
+                         int n_rows, int bytes, std::uint32_t* distances) {
+  for (int k = 0; k < n_rows; ++k)
+    distances[k] = hamming(query, train + static_cast<std::size_t>(rows[k]) * train_stride, bytes);
+}
+
 // Merges per-lane row records of a vector kernel (lane l saw descriptors l, l + L, ...): the
 // lowest index among the smallest bests wins; the second is the smallest of the winner's
 // second and every other lane's best. Equals the record one scalar pass would have built.

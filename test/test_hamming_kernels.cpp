@@ -96,6 +96,35 @@ TEST(HammingKernels, BitExactOnUnalignedRowsOddStridesAndTies) {
       }
 }
 
+TEST(HammingKernels, RowsKernelBitExactForAnyRowListSizeAndLayout) {
+  // Row lists of every length around the kernel's pairs, in any order, with repeats; sizes
+  // the NEON path takes (32 bytes) and the ones it hands to the reference.
+  std::mt19937 rng(11);
+  for (const auto* set : runnable_sets())
+    for (int bytes : {32, 64, 61})
+      for (int offset : {0, 3}) {
+        const std::size_t stride = static_cast<std::size_t>(bytes + offset);
+        const auto t = descriptors(57, bytes, stride, offset, 21, offset == 0 ? 0 : 2);
+        const auto q = descriptors(1, bytes, static_cast<std::size_t>(bytes), 1, 22, offset == 0 ? 0 : 2);
+        for (int n : {0, 1, 2, 3, 4, 5, 8, 9, 31, 100}) {
+          std::vector<int> rows(static_cast<std::size_t>(n));
+          for (int& r : rows) r = static_cast<int>(rng() % 57);
+          std::vector<std::uint32_t> want(rows.size() + 1, 7), got(rows.size() + 1, 7);
+          simd::hamming_rows_scalar(q.data() + 1, t.data() + offset, stride, rows.data(), n, bytes, want.data());
+          set->hamming_rows(q.data() + 1, t.data() + offset, stride, rows.data(), n, bytes, got.data());
+          EXPECT_EQ(got, want) << set->name << " bytes " << bytes << " rows " << n;
+          EXPECT_EQ(got.back(), 7u) << "wrote past the last row";
+          for (int k = 0; k < n; ++k) {
+            std::uint32_t d = 0;
+            for (int b = 0; b < bytes; ++b)
+              d += static_cast<std::uint32_t>(__builtin_popcount(
+                  q[1 + static_cast<std::size_t>(b)] ^ t[static_cast<std::size_t>(offset) + stride * static_cast<std::size_t>(rows[static_cast<std::size_t>(k)]) + static_cast<std::size_t>(b)]));
+            ASSERT_EQ(want[static_cast<std::size_t>(k)], d);
+          }
+        }
+      }
+}
+
 TEST(HammingKernels, BitExactOnRealOrbDescriptors) {
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);

@@ -4,6 +4,7 @@
 #include <numeric>
 #include <opencv2/core.hpp>
 #include <random>
+#include <string>
 
 #include "rgbd_odometry/pipeline/match.hpp"
 
@@ -123,6 +124,90 @@ TEST(SymmetricMatcher, FloatDescriptorsUseL2) {
   EXPECT_EQ(matches[0].curr, 1);
   EXPECT_EQ(matches[1].curr, 0);
   EXPECT_FLOAT_EQ(matches[0].distance, 1.0f);
+}
+
+// The windowed test by its definition: nearest and second-nearest over the allowed pairs
+// only, the plain way (index order, strict '<').
+std::vector<Match> windowed_by_definition(const cv::Mat& prev, const cv::Mat& curr, const std::vector<Eigen::Vector2d>& pred,
+                                          const std::vector<Eigen::Vector2d>& pos, double r, double ratio) {
+  const auto allowed = [&](int i, int j) {
+    const auto& p = pred[static_cast<size_t>(i)];
+    const auto& q = pos[static_cast<size_t>(j)];
+    return std::abs(q.x() - p.x()) <= r && std::abs(q.y() - p.y()) <= r;  // false for NaN
+  };
+  const auto dist = [&](int i, int j) { return static_cast<std::uint32_t>(cv::norm(prev.row(i), curr.row(j), cv::NORM_HAMMING)); };
+  std::vector<simd::NearestTwo> fwd(static_cast<size_t>(prev.rows)), bwd(static_cast<size_t>(curr.rows));
+  for (int i = 0; i < prev.rows; ++i)
+    for (int j = 0; j < curr.rows; ++j)
+      if (allowed(i, j)) {
+        simd::keep_nearest_two(fwd[static_cast<size_t>(i)], dist(i, j), j);
+        simd::keep_nearest_two(bwd[static_cast<size_t>(j)], dist(i, j), i);
+      }
+  std::vector<Match> out;
+  for (int i = 0; i < prev.rows; ++i) {
+    const auto& f = fwd[static_cast<size_t>(i)];
+    if (!passes_ratio_test(f, ratio)) continue;
+    const auto& b = bwd[static_cast<size_t>(f.best_index)];
+    if (b.best_index == i && passes_ratio_test(b, ratio)) out.push_back({i, f.best_index, static_cast<float>(f.best)});
+  }
+  return out;
+}
+
+void expect_same_matches(const std::vector<Match>& a, const std::vector<Match>& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].prev, b[k].prev) << what << " match " << k;
+    EXPECT_EQ(a[k].curr, b[k].curr) << what << " match " << k;
+    EXPECT_EQ(a[k].distance, b[k].distance) << what << " match " << k;
+  }
+}
+
+TEST(SymmetricMatcher, WindowedMatchingIsTheRatioTestOverTheAllowedPairs) {
+  // Random positions and descriptors from a small alphabet (many equal distances: the tie
+  // rule matters), every fifth prediction missing, windows of several sizes; the grid's
+  // order of visiting must not show in the result.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int n_prev = 150 + 10 * trial, n_curr = 170 - 7 * trial;
+    cv::Mat prev(n_prev, 32, CV_8U), curr(n_curr, 32, CV_8U);
+    for (cv::Mat* m : {&prev, &curr})
+      for (int i = 0; i < m->rows; ++i)
+        for (int b = 0; b < 32; ++b) m->at<std::uint8_t>(i, b) = static_cast<std::uint8_t>((rng() % 3) * 0x55u);
+    std::vector<Eigen::Vector2d> pred(static_cast<size_t>(n_prev)), pos(static_cast<size_t>(n_curr));
+    for (auto& p : pos) p = {u(rng), 0.75 * u(rng)};
+    for (size_t i = 0; i < pred.size(); ++i)
+      pred[i] = i % 5 == 4 ? Eigen::Vector2d(NAN, NAN) : Eigen::Vector2d(u(rng), 0.75 * u(rng));
+    for (double r : {0.01, 0.09, 0.3, 5.0}) {
+      SymmetricMatcher matcher(0.8);
+      std::vector<Match> got;
+      matcher.match_within(prev, curr, pred, pos, r, got);
+      expect_same_matches(got, windowed_by_definition(prev, curr, pred, pos, r, 0.8),
+                          "trial " + std::to_string(trial) + " radius " + std::to_string(r));
+    }
+  }
+}
+
+TEST(SymmetricMatcher, AWindowOverTheWholeImageIsTheFullSearch) {
+  cv::Mat curr = random_descriptors(300, 32, 8), prev = curr.clone();
+  for (int i = 0; i < prev.rows; i += 2) flipped(curr.row(i), 20, static_cast<unsigned>(i)).copyTo(prev.row(i));
+  std::vector<Eigen::Vector2d> pred(300), pos(300);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  for (auto* v : {&pred, &pos})
+    for (auto& p : *v) p = {u(rng), u(rng)};
+  SymmetricMatcher matcher(0.8);
+  std::vector<Match> full, windowed;
+  matcher.match(prev, curr, full);
+  matcher.match_within(prev, curr, pred, pos, 2.0, windowed);
+  ASSERT_GT(full.size(), 250u);
+  expect_same_matches(windowed, full, "window 2.0 over positions within 0.6");
+  // A keypoint whose true partner lies outside its window cannot match it.
+  pred[0] = pos[0] + Eigen::Vector2d(0.05, 0);
+  matcher.match_within(prev, curr, pred, pos, 0.049, windowed);
+  EXPECT_TRUE(std::none_of(windowed.begin(), windowed.end(), [](const Match& m) { return m.prev == 0 && m.curr == 0; }));
+  matcher.match_within(prev, curr, pred, pos, 0.051, windowed);
+  EXPECT_TRUE(std::any_of(windowed.begin(), windowed.end(), [](const Match& m) { return m.prev == 0 && m.curr == 0; }));
 }
 
 TEST(SymmetricMatcher, EmptyInputGivesNoMatches) {

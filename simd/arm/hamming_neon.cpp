@@ -122,4 +122,25 @@ void nearest_two_hamming_neon(const std::uint8_t* query, int n_query, std::size_
   for (std::size_t j = 0; j < n; ++j) train_out[j] = NearestTwo{s.col_index[j], s.col_best[j], s.col_second[j]};
 }
 
+
+// Two rows at a time: VEOR, VCNT and byte adds per row, then one pairwise fold of both.
+RGBDO_HAMMING_ROWS(hamming_rows_neon) {
+  if (bytes != 32) {
+    reference::hamming_rows(query, train, train_stride, rows, n_rows, bytes, distances);
+    return;
+  }
+  const uint8x16_t q_lo = vld1q_u8(query), q_hi = vld1q_u8(query + 16);
+  int k = 0;
+  for (; k + 2 <= n_rows; k += 2) {
+    const std::uint8_t* a = train + static_cast<std::size_t>(rows[k]) * train_stride;
+    const std::uint8_t* b = train + static_cast<std::size_t>(rows[k + 1]) * train_stride;
+    const uint8x8_t ca = pair_counts(q_lo, q_hi, vld1q_u8(a), vld1q_u8(a + 16));
+    const uint8x8_t cb = pair_counts(q_lo, q_hi, vld1q_u8(b), vld1q_u8(b + 16));
+    // [ca cb] -> per row: 8 bytes of <= 32 -> two 32-bit sums
+    const uint32x2_t d = vpadd_u32(vpaddl_u16(vpaddl_u8(ca)), vpaddl_u16(vpaddl_u8(cb)));
+    vst1_u32(distances + k, d);
+  }
+  if (k < n_rows) distances[k] = reference::hamming(query, train + static_cast<std::size_t>(rows[k]) * train_stride, 32);
+}
+
 }  // namespace rgbdo::simd

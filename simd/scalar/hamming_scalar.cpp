@@ -11,4 +11,9 @@ void nearest_two_hamming_scalar(const std::uint8_t* query, int n_query, std::siz
   reference::nearest_two(query, n_query, query_stride, train, n_train, train_stride, bytes, query_out, train_out);
 }
 
+
+RGBDO_HAMMING_ROWS(hamming_rows_scalar) {
+  reference::hamming_rows(query, train, train_stride, rows, n_rows, bytes, distances);
+}
+
 }  // namespace rgbdo::simd

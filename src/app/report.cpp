@@ -42,13 +42,13 @@ std::string pair_line(const PairResult& r, std::size_t index, bool verbose) {
     s << std::setprecision(2) << "  | features " << r.features_curr << " matches " << r.matches << " thr "
       << r.inlier_threshold_m * 1e3 << "mm | ms detect " << r.times.detect_ms << " match " << r.times.match_ms
       << " backproject " << r.times.backproject_ms << " ransac " << r.times.ransac_ms << " covariance "
-      << r.times.covariance_ms;
+      << r.times.covariance_ms << (r.rematched ? " | rematched" : "");
   }
   return s.str();
 }
 
 void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const StageTimes& total,
-                   int timed_pairs, const RealtimeStats& run) {
+                   int timed_pairs, int rematched_pairs, const RealtimeStats& run) {
   out << "summary: " << s.pairs << " pairs, " << s.pairs - s.failed << " ok, " << s.failed << " failed";
   for (const auto& [word, n] : s.failures) out << " (" << word << ": " << n << ")";
   out << "\n";
@@ -72,6 +72,8 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
         << ", backproject " << total.backproject_ms / n << ", ransac " << total.ransac_ms / n << ", covariance "
         << total.covariance_ms / n << " ms]\n";
   }
+  if (rematched_pairs > 0)
+    out << "  matching: " << rematched_pairs << " pairs matched again over the whole image (the motion window fell short)\n";
   if (!with_groundtruth) {
     out << "  no groundtruth.txt: accuracy not evaluated\n";
     return;

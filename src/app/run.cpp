@@ -101,6 +101,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   AccuracyEvaluator evaluator(groundtruth, config.covariance.scale);
   StageTimes total;
   int timed_pairs = 0;
+  int rematched_pairs = 0;
   size_t pair_count = 0;
   std::string output_error;
   // Runs on the pipeline's output thread, one frame at a time, in capture order.
@@ -122,6 +123,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
         total.covariance_ms += r.times.covariance_ms;
         ++timed_pairs;
       }
+      rematched_pairs += r.rematched ? 1 : 0;
       if (log) log->write(r);
       if (flight) flight->send_pair(r);
       if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
@@ -170,7 +172,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     err << "rgbd-odometry: " << output_error << "\n";
     return 1;
   }
-  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, run);
+  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, rematched_pairs, run);
   if (flight) {
     const LinkStats st = flight->stats();
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down

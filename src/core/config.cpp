@@ -46,6 +46,7 @@ std::vector<Param> param_table(Config& c) {
       {"features.orb_scale_factor", &c.features.orb_scale_factor, 1.01, 2.0},
       {"features.fast_threshold", &c.features.fast_threshold, 1, 255},
       {"matching.ratio", &c.matching.ratio, 1e-6, 1.0},
+      {"matching.window_px", &c.matching.window_px, 0, 1e5},
       {"ransac.inlier_threshold_m", &c.ransac.inlier_threshold_m, 1e-5, 10},
       {"ransac.max_iterations", &c.ransac.max_iterations, 1, 1000000},
       {"ransac.refine_threshold", &c.ransac.refine_threshold},

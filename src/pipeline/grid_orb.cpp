@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/core/rng.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
 
@@ -343,6 +344,7 @@ void GridOrbExtractor::select_level(int level, Features& out) {
     return a.y != b.y ? a.y < b.y : a.x < b.x;
   });
   const float size = static_cast<float>(31.0 * L.scale);
+  mark_cost_stage(CostStage::Detect);
   for (const Candidate& c : chosen_) {
     const size_t row = out.keypoints.size();
     const float angle = orientation(L, c.x, c.y);
@@ -409,12 +411,14 @@ void GridOrbExtractor::detect(const cv::Mat& gray, const cv::Mat& mask, Features
   out.keypoints.clear();
   if (out.descriptor_storage.rows < config_.max_features || out.descriptor_storage.cols != kDescriptorBits / 8)
     out.descriptor_storage.create(config_.max_features, kDescriptorBits / 8, CV_8UC1);
+  mark_cost_stage(CostStage::Pyramid);
   build_pyramid(gray);
   int carried = 0;  // budget a level could not use goes to the next
   for (int l = 0; l < static_cast<int>(levels_.size()); ++l) {
     Level& L = levels_[static_cast<size_t>(l)];
     const int own = L.budget;
     L.budget += carried;
+    mark_cost_stage(CostStage::Corners);
     detect_level(l, mask);
     const size_t before = out.keypoints.size();
     select_level(l, out);

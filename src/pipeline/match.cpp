@@ -1,5 +1,6 @@
 #include "rgbd_odometry/pipeline/match.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -25,6 +26,21 @@ void nearest_two_l2(const cv::Mat& q, const cv::Mat& t, simd::NearestTwo* q_out,
   }
 }
 
+// keep_nearest_two's record for candidates met in any order: among equal distances the lowest
+// index wins, as it does when they come in index order.
+inline void keep_nearest_two_any_order(simd::NearestTwo& n, std::uint32_t d, int index) {
+  if (d < n.best || (d == n.best && index < n.best_index)) {
+    n.second = n.best;
+    n.best = d;
+    n.best_index = index;
+  } else if (d < n.second) {
+    n.second = d;
+  }
+}
+
+// At most this many grid cells per axis: a tiny radius must not make the grid huge.
+constexpr int kMaxGridCells = 64;
+
 float as_distance(std::uint32_t d, bool binary) {
   if (binary) return static_cast<float>(d);
   float s;
@@ -38,6 +54,15 @@ bool passes_ratio_test(const simd::NearestTwo& n, double ratio) {
   if (n.best_index < 0) return false;
   if (n.second == UINT32_MAX) return true;
   return static_cast<double>(n.best) < ratio * static_cast<double>(n.second);
+}
+
+void SymmetricMatcher::reserve(int max_features) {
+  const auto n = static_cast<size_t>(max_features);
+  for (auto* v : {&prev_nn_, &curr_nn_}) v->reserve(n);
+  for (auto* v : {&cell_of_, &by_cell_, &candidates_}) v->reserve(n);
+  by_cell_position_.reserve(n);
+  distances_.reserve(n);
+  cell_start_.reserve(kMaxGridCells * kMaxGridCells + 1);
 }
 
 void SymmetricMatcher::match(const cv::Mat& prev, const cv::Mat& curr, std::vector<Match>& out) {
@@ -54,13 +79,103 @@ void SymmetricMatcher::match(const cv::Mat& prev, const cv::Mat& curr, std::vect
     CV_Assert(prev.type() == CV_32FC1);
     nearest_two_l2(prev, curr, prev_nn_.data(), curr_nn_.data());
   }
+  keep_mutual(prev.rows, binary, out);
+}
+
+void SymmetricMatcher::match_within(const cv::Mat& prev, const cv::Mat& curr, std::span<const Eigen::Vector2d> predicted,
+                                    std::span<const Eigen::Vector2d> curr_positions, double radius,
+                                    std::vector<Match>& out) {
+  out.clear();
+  if (prev.empty() || curr.empty()) return;
+  CV_Assert(prev.type() == CV_8UC1 && curr.type() == CV_8UC1 && prev.cols == curr.cols);
+  CV_Assert(predicted.size() == static_cast<size_t>(prev.rows) && curr_positions.size() == static_cast<size_t>(curr.rows));
+  CV_Assert(radius > 0);
+  prev_nn_.assign(static_cast<size_t>(prev.rows), simd::NearestTwo{});
+  curr_nn_.assign(static_cast<size_t>(curr.rows), simd::NearestTwo{});
+
+  // The grid: cells at least `radius` wide, so a window spans at most 3 x 3 of them.
+  double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+  for (const Eigen::Vector2d& p : curr_positions) {
+    min_x = std::min(min_x, p.x()), max_x = std::max(max_x, p.x());
+    min_y = std::min(min_y, p.y()), max_y = std::max(max_y, p.y());
+  }
+  if (!(max_x >= min_x && max_y >= min_y)) return;  // no finite position
+  const double cell_w = std::max(radius, (max_x - min_x) / (kMaxGridCells - 1));
+  const double cell_h = std::max(radius, (max_y - min_y) / (kMaxGridCells - 1));
+  const int nx = std::min(static_cast<int>((max_x - min_x) / cell_w) + 1, kMaxGridCells);
+  const int ny = std::min(static_cast<int>((max_y - min_y) / cell_h) + 1, kMaxGridCells);
+  // Clamped in floating point first: a far-off or NaN position must not overflow the int.
+  const auto cell_x = [&](double x) {
+    const double c = std::floor((x - min_x) / cell_w);
+    return c >= 0 ? static_cast<int>(std::min(c, static_cast<double>(nx))) : -1;
+  };
+  const auto cell_y = [&](double y) {
+    const double c = std::floor((y - min_y) / cell_h);
+    return c >= 0 ? static_cast<int>(std::min(c, static_cast<double>(ny))) : -1;
+  };
+  // Counting sort of the current keypoints by cell (index order within a cell).
+  cell_start_.assign(static_cast<size_t>(nx * ny + 1), 0);
+  cell_of_.resize(static_cast<size_t>(curr.rows));
+  for (int j = 0; j < curr.rows; ++j) {
+    const Eigen::Vector2d& p = curr_positions[static_cast<size_t>(j)];
+    const int cx = cell_x(p.x()), cy = cell_y(p.y());
+    const bool inside = cx >= 0 && cx < nx && cy >= 0 && cy < ny;  // false only for NaN
+    cell_of_[static_cast<size_t>(j)] = inside ? cy * nx + cx : -1;
+    if (inside) ++cell_start_[static_cast<size_t>(cy * nx + cx + 1)];
+  }
+  for (size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+  by_cell_.resize(static_cast<size_t>(cell_start_.back()));
+  by_cell_position_.resize(by_cell_.size());
+  candidates_.resize(by_cell_.size());  // every search fills at most all of them
+  distances_.resize(by_cell_.size());
+  for (int j = 0; j < curr.rows; ++j) {
+    const int c = cell_of_[static_cast<size_t>(j)];
+    if (c < 0) continue;
+    // cell_start_[c] counts up as the cell fills; shifted back below.
+    const auto slot = static_cast<size_t>(cell_start_[static_cast<size_t>(c)]++);
+    by_cell_[slot] = j;
+    by_cell_position_[slot] = curr_positions[static_cast<size_t>(j)];
+  }
+  for (size_t c = cell_start_.size() - 1; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
+  cell_start_[0] = 0;
+
+  for (int i = 0; i < prev.rows; ++i) {
+    const Eigen::Vector2d& p = predicted[static_cast<size_t>(i)];
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;
+    const double lo_x = p.x() - radius, hi_x = p.x() + radius, lo_y = p.y() - radius, hi_y = p.y() + radius;
+    if (hi_x < min_x || lo_x > max_x || hi_y < min_y || lo_y > max_y) continue;  // window off the frame
+    const int cx0 = std::max(cell_x(lo_x), 0), cx1 = std::min(cell_x(hi_x), nx - 1);
+    const int cy0 = std::max(cell_y(lo_y), 0), cy1 = std::min(cell_y(hi_y), ny - 1);
+    int n = 0;
+    for (int cy = cy0; cy <= cy1; ++cy) {
+      // The cells cx0..cx1 of one grid row are contiguous in by_cell_.
+      const int begin = cell_start_[static_cast<size_t>(cy * nx + cx0)], end = cell_start_[static_cast<size_t>(cy * nx + cx1 + 1)];
+      for (int k = begin; k < end; ++k) {
+        const Eigen::Vector2d& q = by_cell_position_[static_cast<size_t>(k)];
+        if (q.x() >= lo_x && q.x() <= hi_x && q.y() >= lo_y && q.y() <= hi_y) candidates_[static_cast<size_t>(n++)] = by_cell_[static_cast<size_t>(k)];
+      }
+    }
+    if (n == 0) continue;
+    hamming_rows_(prev.ptr<std::uint8_t>(i), curr.data, curr.step, candidates_.data(), n, prev.cols, distances_.data());
+    simd::NearestTwo& forward = prev_nn_[static_cast<size_t>(i)];
+    for (int k = 0; k < n; ++k) {
+      const int j = candidates_[static_cast<size_t>(k)];
+      const std::uint32_t d = distances_[static_cast<size_t>(k)];
+      keep_nearest_two_any_order(forward, d, j);
+      keep_nearest_two_any_order(curr_nn_[static_cast<size_t>(j)], d, i);
+    }
+  }
+  keep_mutual(prev.rows, true, out);
+}
+
+void SymmetricMatcher::keep_mutual(int n_prev, bool binary, std::vector<Match>& out) const {
   const auto passes = [&](const simd::NearestTwo& n) {
     if (binary) return passes_ratio_test(n, ratio_);
     if (n.best_index < 0) return false;
     if (n.second == UINT32_MAX) return true;
     return as_distance(n.best, false) < ratio_ * as_distance(n.second, false);
   };
-  for (int i = 0; i < prev.rows; ++i) {
+  for (int i = 0; i < n_prev; ++i) {
     const auto& forward = prev_nn_[static_cast<size_t>(i)];
     if (!passes(forward)) continue;
     const auto& backward = curr_nn_[static_cast<size_t>(forward.best_index)];

@@ -1,6 +1,7 @@
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 
 #include <chrono>
+#include <limits>
 
 #include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/cost_stage.hpp"
@@ -25,6 +26,30 @@ std::uint64_t mix(std::uint64_t seed, std::uint64_t index) {
   return splitmix64_mix(seed + kSplitMix64Increment * (index + 1));
 }
 
+// Where each keypoint of the previous frame appears in the current one (normalised image
+// coordinates) if the camera moved by the prior's velocity over dt_s; NaN without depth.
+// First order in the rotation (a few degrees per frame at most: the window absorbs the
+// rest) and plain IEEE operations, so every build predicts the same positions.
+void predict_positions(const KeypointGeometry& prev, const MotionPrior& prior, double dt_s,
+                       std::vector<Eigen::Vector2d>& out) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double tx = prior.velocity_mps.x() * dt_s, ty = prior.velocity_mps.y() * dt_s, tz = prior.velocity_mps.z() * dt_s;
+  const double ax = prior.angular_velocity_radps.x() * dt_s, ay = prior.angular_velocity_radps.y() * dt_s,
+               az = prior.angular_velocity_radps.z() * dt_s;
+  out.resize(prev.depth_m.size());
+  for (size_t i = 0; i < out.size(); ++i) {
+    const double z = prev.depth_m[i];
+    if (!(z > 0)) {
+      out[i] = {nan, nan};
+      continue;
+    }
+    // P_curr = R^T (P_prev - t) with R = exp([a]x) ~ I + [a]x: P_curr ~ d - a x d, d = P_prev - t.
+    const double dx = prev.normalized[i].x() * z - tx, dy = prev.normalized[i].y() * z - ty, dz = z - tz;
+    const double px = dx - (ay * dz - az * dy), py = dy - (az * dx - ax * dz), pz = dz - (ax * dy - ay * dx);
+    out[i] = pz > 0 ? Eigen::Vector2d(px / pz, py / pz) : Eigen::Vector2d(nan, nan);
+  }
+}
+
 }  // namespace
 
 PairEstimator::PairEstimator(const Config& config)
@@ -35,10 +60,43 @@ PairEstimator::PairEstimator(const Config& config)
   // Sized once for the largest possible frame: the pair stage never allocates afterwards.
   const auto capacity = static_cast<size_t>(config.features.max_features);
   matches_.reserve(capacity);
+  matcher_.reserve(config.features.max_features);
+  predicted_.reserve(capacity);
   for (auto* v : {&pairs_.prev, &pairs_.curr, &inlier_prev_, &inlier_curr_}) v->reserve(capacity);
   pairs_.match_index.reserve(capacity);
   fit_.inliers.reserve(capacity);
   refined_.inliers.reserve(capacity);
+}
+
+Status PairEstimator::match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
+                                   double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_index, PairResult& r) {
+  mark_cost_stage(CostStage::Match);
+  auto t0 = Clock::now();
+  if (window_prior != nullptr) {
+    predict_positions(prev.geometry, *window_prior, dt_s, predicted_);
+    matcher_.match_within(prev.features.descriptors, curr.features.descriptors, predicted_, curr.geometry.normalized,
+                          config_.matching.window_px / config_.camera.fx, matches_);
+  } else {
+    matcher_.match(prev.features.descriptors, curr.features.descriptors, matches_);
+  }
+  r.matches = static_cast<int>(matches_.size());
+  r.times.match_ms += ms_since(t0);
+  if (r.matches < config_.ransac.min_inliers) return Status::TooFewMatches;
+
+  mark_cost_stage(CostStage::PointPairs);
+  t0 = Clock::now();
+  build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, timing_prior, pairs_);
+  r.point_pairs = static_cast<int>(pairs_.size());
+  r.times.backproject_ms += ms_since(t0);
+  if (r.point_pairs < config_.ransac.min_inliers) return Status::TooFewMatches;
+
+  // Its own stream per pair (the covariance's is another), the same for a second attempt.
+  Rng ransac_rng(mix(config_.seed, 2 * pair_index));
+  mark_cost_stage(CostStage::Ransac);
+  t0 = Clock::now();
+  ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_);
+  r.times.ransac_ms += ms_since(t0);
+  return fit_.status;
 }
 
 PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index) {
@@ -58,33 +116,21 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const double dt_s = static_cast<double>(r.t_curr_ns - r.t_prev_ns) * 1e-9;
 
   const CostStagesEnd stages_end;
-  mark_cost_stage(CostStage::Match);
-  auto t0 = Clock::now();
-  matcher_.match(prev.features.descriptors, curr.features.descriptors, matches_);
-  r.matches = static_cast<int>(matches_.size());
-  r.times.match_ms = ms_since(t0);
-  if (r.matches < config_.ransac.min_inliers) return fail(Status::TooFewMatches);
-
   const bool compensate = config_.depth.compensate_timing && dt_s > 0;
   // Before this pair is solved, the previous pair's velocity is the best guess (zero after a gap).
   const MotionPrior prior = last_motion_.value_or(MotionPrior{});
-  mark_cost_stage(CostStage::PointPairs);
-  t0 = Clock::now();
-  build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, compensate ? &prior : nullptr,
-                    pairs_);
-  r.point_pairs = static_cast<int>(pairs_.size());
-  r.times.backproject_ms = ms_since(t0);
-  if (r.point_pairs < config_.ransac.min_inliers) return fail(Status::TooFewMatches);
+  const bool windowed = config_.matching.window_px > 0 && prev.features.descriptors.type() == CV_8UC1 &&
+                        curr.features.descriptors.type() == CV_8UC1;
+  Status solved = match_and_fit(prev, curr, windowed ? &prior : nullptr, dt_s, compensate ? &prior : nullptr, pair_index, r);
+  if (windowed && (solved != Status::Ok || fit_.inliers.size() < 2 * static_cast<size_t>(config_.ransac.min_inliers))) {
+    // The prior was wrong (a jolt, a gap) or the scene is bare: the paper's search over all pairs.
+    r.rematched = true;
+    solved = match_and_fit(prev, curr, nullptr, dt_s, compensate ? &prior : nullptr, pair_index, r);
+  }
+  if (solved != Status::Ok) return fail(solved);
 
-  // Separate streams: the covariance's noise must not depend on how many draws RANSAC used.
-  Rng ransac_rng(mix(config_.seed, 2 * pair_index));
   Rng covariance_rng(mix(config_.seed, 2 * pair_index + 1));
-  mark_cost_stage(CostStage::Ransac);
-  t0 = Clock::now();
-  ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_);
-  r.times.ransac_ms = ms_since(t0);
-  if (fit_.status != Status::Ok) return fail(fit_.status);
-
+  auto t0 = Clock::now();
   if (compensate) {
     // Second pass: carry the depths to colour time with this pair's own velocity, which is
     // better than the previous pair's whenever the depth frames are far enough apart.

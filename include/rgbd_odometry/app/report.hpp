@@ -14,8 +14,9 @@ namespace rgbdo {
 
 std::string pair_line(const PairResult& r, std::size_t index, bool verbose);
 
-// `total` sums the stage times of `timed_pairs` good pairs.
+// `total` sums the stage times of `timed_pairs` good pairs; `rematched_pairs` counts the pairs
+// whose windowed matching fell short (PairResult::rematched).
 void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const StageTimes& total,
-                   int timed_pairs, const RealtimeStats& run);
+                   int timed_pairs, int rematched_pairs, const RealtimeStats& run);
 
 }  // namespace rgbdo

@@ -52,6 +52,11 @@ struct FeatureConfig {
 
 struct MatchConfig {
   double ratio = 0.8;  // lambda_ratio: best / second-best distance must be below this
+  // Search window (pixels, half width) around where the motion prior puts each previous
+  // keypoint in the current frame; 0 compares every pair, as the paper does. A pair whose
+  // windowed search fails, or keeps fewer than twice ransac.min_inliers, is matched again
+  // over the whole image. Binary descriptors only (float ones always compare every pair).
+  double window_px = 48;
 };
 
 struct RansacConfig {

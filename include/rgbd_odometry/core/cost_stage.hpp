@@ -17,16 +17,18 @@ enum class CostStage : std::uint32_t {
   Other,       // everything outside the stages below: start-up, runtime, output
   Decode,      // reading a recorded frame (PNG decoding): not part of the target's work
   Mask,        // periphery and depth mask
-  Detect,      // keypoints and descriptors
+  Detect,      // keypoints and descriptors (our extractor: orientation and descriptors only)
   Geometry,    // keypoints' undistortion, depth and depth gradient
   Match,       // symmetric ratio-test matching
   PointPairs,  // 3-D correspondences (both passes of the timing compensation)
   Ransac,      // hypotheses, refinement, final fit
   Covariance,  // the perturbations
+  Pyramid,     // detection, our extractor: the image pyramid and its descriptor smoothing
+  Corners,     // detection, our extractor: segment test, score, suppression, spread over cells
 };
-inline constexpr std::size_t kCostStageCount = 9;
+inline constexpr std::size_t kCostStageCount = 11;
 inline constexpr std::array<const char*, kCostStageCount> kCostStageNames{
-    "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance"};
+    "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance", "pyramid", "corners"};
 // The first extra argument of the marker call ("RGBD"): tells a marker from a real getpid.
 inline constexpr std::uint32_t kCostMarkerMagic = 0x52474244u;
 

@@ -25,6 +25,7 @@ struct PairResult {
   Status status = Status::Ok;
   int features_prev = 0, features_curr = 0;
   int matches = 0;      // symmetric ratio-test matches
+  bool rematched = false;  // the windowed search fell short; matched again over the whole image
   int point_pairs = 0;  // matches with usable depth in both frames
   int inliers = 0;
   double inlier_threshold_m = 0;

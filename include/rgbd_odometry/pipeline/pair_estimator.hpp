@@ -29,11 +29,18 @@ class PairEstimator {
   void forget_motion() { last_motion_.reset(); }
 
  private:
+  // Matching (within the window window_prior predicts, or over all pairs when null), 3-D
+  // point pairs (depths carried to colour time with timing_prior, unless null) and RANSAC's
+  // first fit into fit_; fills r's counts and adds to its times.
+  Status match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
+                       double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_index, PairResult& r);
+
   Config config_;
   SymmetricMatcher matcher_;
   RigidRansac ransac_;
   PerturbationCovariance covariance_;
   std::vector<Match> matches_;
+  std::vector<Eigen::Vector2d> predicted_;  // previous keypoints' positions in the current frame
   PointPairs pairs_;
   RansacResult fit_, refined_;
   std::vector<Eigen::Vector3d> inlier_prev_, inlier_curr_;

@@ -19,6 +19,9 @@ using NearestTwoHammingFn = void (*)(const std::uint8_t* query, int n_query, std
                                      const std::uint8_t* train, int n_train, std::size_t train_stride, int bytes,
                                      NearestTwo* query_out, NearestTwo* train_out);
 
+using HammingRowsFn = void (*)(const std::uint8_t* query, const std::uint8_t* train, std::size_t train_stride,
+                               const int* rows, int n_rows, int bytes, std::uint32_t* distances);
+
 using PerturbationSumsFn = void (*)(const PerturbationInput& in, const PerturbationSums& out);
 
 using ScoreRigidFn = void (*)(const RigidScoreInput& in, int& count, float& cost);
@@ -28,6 +31,7 @@ using Fast9RowFn = void (*)(const std::uint8_t* row, std::ptrdiff_t stride, int 
 struct KernelSet {
   const char* name;  // "scalar", "neon", "avx2", ...
   NearestTwoHammingFn nearest_two_hamming;
+  HammingRowsFn hamming_rows;
   PerturbationSumsFn perturbation_sums;
   ScoreRigidFn score_rigid;
   Fast9RowFn fast9_row;

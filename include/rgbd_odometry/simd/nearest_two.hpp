@@ -40,4 +40,15 @@ RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_popcnt);  // simd/x86/hamming_popc
 RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_avx2);    // simd/x86/hamming_avx2.cpp (x86-64 builds)
 RGBDO_NEAREST_TWO_HAMMING(nearest_two_hamming_neon);    // simd/arm/hamming_neon.cpp (ARM builds)
 
+// The distances from one query descriptor to the train rows listed in `rows` (indices, any
+// order): distances[k] = Hamming(query, train + rows[k] * train_stride) over `bytes` bytes.
+// The windowed matcher's kernel (pipeline/match.hpp): its candidates are a few rows scattered
+// over the train set, not the whole set.
+#define RGBDO_HAMMING_ROWS(name)                                                                    \
+  void name(const std::uint8_t* query, const std::uint8_t* train, std::size_t train_stride, const int* rows, \
+            int n_rows, int bytes, std::uint32_t* distances)
+RGBDO_HAMMING_ROWS(hamming_rows_scalar);  // simd/scalar/hamming_scalar.cpp, the reference
+RGBDO_HAMMING_ROWS(hamming_rows_popcnt);  // simd/x86/hamming_popcnt.cpp (x86-64 builds: sse42 and avx2 sets)
+RGBDO_HAMMING_ROWS(hamming_rows_neon);    // simd/arm/hamming_neon.cpp (ARM builds)
+
 }  // namespace rgbdo::simd
