@@ -10,16 +10,10 @@
 
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
+#include "runnable_kernel_sets.hpp"
 
 namespace rgbdo {
 namespace {
-
-std::vector<const simd::KernelSet*> runnable_sets() {
-  std::vector<const simd::KernelSet*> sets;
-  for (const auto& s : simd::compiled_kernel_sets())
-    if (simd::cpu_supports(s)) sets.push_back(&s);
-  return sets;
-}
 
 // Flags of every set over rows [3, rows - 3) from column `start`, n pixels, against scalar.
 void expect_same_as_scalar(const cv::Mat& image, int start, int n, int threshold, const std::string& what) {

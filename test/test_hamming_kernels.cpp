@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rgbd_odometry/simd/kernels.hpp"
+#include "runnable_kernel_sets.hpp"
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
@@ -24,13 +25,6 @@ namespace {
 
 bool operator==(const simd::NearestTwo& a, const simd::NearestTwo& b) {
   return a.best_index == b.best_index && a.best == b.best && a.second == b.second;
-}
-
-std::vector<const simd::KernelSet*> runnable_sets() {
-  std::vector<const simd::KernelSet*> sets;
-  for (const auto& s : simd::compiled_kernel_sets())
-    if (simd::cpu_supports(s)) sets.push_back(&s);
-  return sets;
 }
 
 // Rows of `bytes` bytes, `stride` apart, starting `offset` bytes into the buffer. alphabet

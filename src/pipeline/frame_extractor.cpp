@@ -28,7 +28,7 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   const CostStagesEnd stages_end;
   mark_cost_stage(CostStage::Mask);
   build_feature_mask(frame.depth_m, depth_, border_px_, mask_);
-  if (cv::countNonZero(mask_) == 0) {
+  if (mask_is_empty(mask_)) {
     out.status = Status::NoDepth;
     return;
   }

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
+#include <utility>
 
 #include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/core/rng.hpp"
@@ -15,9 +17,7 @@
 namespace rgbdo {
 namespace {
 
-constexpr int kOrientationRadius = 15;
 constexpr int kPatternRadius = 13;
-constexpr int kBoxHalf = 2;  // 5x5 box means
 constexpr int kMinCellPx = 12, kMaxCellPx = 64;
 constexpr std::uint64_t kPatternSeed = 0x4752494430524231ULL;  // "GRID0RB1": the pattern is fixed by it
 
@@ -93,7 +93,15 @@ const std::array<GridOrbExtractor::PointPair, GridOrbExtractor::kDescriptorBits>
 }
 
 GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int height)
-    : config_(config), width_(width), height_(height), fast9_row_(simd::active_kernels().fast9_row) {
+    : config_(config),
+      width_(width),
+      height_(height),
+      fast9_row_(simd::active_kernels().fast9_row),
+      blend_rows_(simd::active_kernels().blend_rows),
+      resample_row_(simd::active_kernels().resample_row),
+      box5_row_(simd::active_kernels().box5_row),
+      disc_moments_(simd::active_kernels().disc_moments),
+      box_stride_(width) {
   const int n_levels = config.orb_levels;
   const double factor = 1.0 / config.orb_scale_factor;
   levels_.resize(static_cast<size_t>(n_levels));
@@ -107,7 +115,10 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
     const int w = l == 0 ? width : static_cast<int>(std::lround(width / scale));
     const int h = l == 0 ? height : static_cast<int>(std::lround(height / scale));
     L.image.create(h, w, CV_8UC1);
-    L.integral.assign(static_cast<size_t>(w + 1) * static_cast<size_t>(h + 1), 0);
+    L.box.assign(static_cast<size_t>(box_stride_) * static_cast<size_t>(h), 0);
+    // The level-0 pixel under each level pixel's centre, for the mask.
+    for (int x = 0; x < w; ++x) L.mask_x.push_back(std::min(static_cast<int>((x + 0.5) * L.scale), width - 1));
+    for (int y = 0; y < h; ++y) L.mask_y.push_back(std::min(static_cast<int>((y + 0.5) * L.scale), height - 1));
     L.budget = l == n_levels - 1 ? std::max(config.max_features - assigned, 0) : static_cast<int>(std::lround(per_level));
     assigned += L.budget;
     per_level *= factor;
@@ -117,26 +128,40 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
       // Source position of each output pixel centre in the previous level, pixel centres aligned.
       const Level& src = levels_[static_cast<size_t>(l - 1)];
       const double step = config.orb_scale_factor;
-      const auto table = [&](int n_out, int n_src, std::vector<int>& i0, std::vector<std::uint16_t>& wt) {
-        i0.resize(static_cast<size_t>(n_out));
-        wt.resize(static_cast<size_t>(n_out));
-        for (int o = 0; o < n_out; ++o) {
-          const double s = (o + 0.5) * step - 0.5;
-          int i = static_cast<int>(std::floor(s));
-          int w8 = static_cast<int>(std::lround((s - i) * 256));
-          if (i < 0) i = 0, w8 = 0;
-          if (i >= n_src - 1) i = n_src - 2, w8 = 256;
-          i0[static_cast<size_t>(o)] = i;
-          wt[static_cast<size_t>(o)] = static_cast<std::uint16_t>(w8);
-        }
+      // The source pixel left of the output centre and the right one's weight; a weight that
+      // rounds to 256 is the next pixel's 0, so weights fit a byte (the kernels' form).
+      const auto source = [&](int o, int n_src) {
+        const double s = (o + 0.5) * step - 0.5;
+        int i = static_cast<int>(std::floor(s));
+        int w8 = static_cast<int>(std::lround((s - i) * 256));
+        if (w8 == 256) ++i, w8 = 0;
+        if (i < 0) i = 0, w8 = 0;
+        if (i >= n_src - 1) i = n_src - 1, w8 = 0;
+        return std::pair{i, w8};
       };
-      table(w, src.image.cols, L.x0, L.wx);
-      table(h, src.image.rows, L.y0, L.wy);
+      L.y0.resize(static_cast<size_t>(h));
+      L.wy.resize(static_cast<size_t>(h));
+      for (int o = 0; o < h; ++o) {
+        const auto [i, w8] = source(o, src.image.rows);
+        L.y0[static_cast<size_t>(o)] = i;
+        L.wy[static_cast<size_t>(o)] = static_cast<std::uint16_t>(w8);
+      }
+      L.x_groups.assign(static_cast<size_t>((w + 7) / 8), simd::ResampleGroup{});
+      for (int o = 0; o < w; ++o) {
+        const auto [i, w8] = source(o, src.image.cols);
+        simd::ResampleGroup& g = L.x_groups[static_cast<size_t>(o / 8)];
+        if (o % 8 == 0) g.base = i;
+        // Eight outputs span at most 7 * 2 + 1 source pixels at scale factors up to 2 (the
+        // configuration's limit): index + 1 stays within the 16 bytes a kernel loads.
+        if (i - g.base + 1 > 15) throw std::logic_error("GRID_ORB: a pyramid step wider than 2");
+        g.index[o % 8] = static_cast<std::uint8_t>(i - g.base);
+        g.weight[o % 8] = static_cast<std::uint8_t>(w8);
+      }
     }
     scale *= config.orb_scale_factor;
   }
   score_.assign(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
-  row_buffer_.assign(static_cast<size_t>(width), 0);
+  row_buffer_.assign(static_cast<size_t>(width) + 16, 0);  // + what a resampling kernel may read past a row
   // Bounds fixed here, so detection never allocates: corners before suppression at most one
   // pixel in four of level 0 (a real image has a few per cent; only noise reaches it, and the
   // scan then stops), cells as many as the smallest cell makes.
@@ -144,21 +169,16 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
   const size_t max_cells = static_cast<size_t>(width / kMinCellPx + 1) * static_cast<size_t>(height / kMinCellPx + 1);
   cell_best_.reserve(max_cells);
   chosen_.reserve(max_cells + static_cast<size_t>(config.max_features));
-  // The orientation disc: half width of each row.
-  for (int dy = -kOrientationRadius; dy <= kOrientationRadius; ++dy)
-    disc_half_width_.push_back(
-        static_cast<int>(std::floor(std::sqrt(static_cast<double>(kOrientationRadius * kOrientationRadius - dy * dy)))));
-  // The pattern steered to every orientation step, rounded in integers.
+  // The pattern steered to every orientation step, rounded in integers, as offsets in a box image.
   const auto& base = pattern();
   for (int k = 0; k < kAngleSteps; ++k) {
     const Direction d = directions()[static_cast<size_t>(k)];
     for (int i = 0; i < kDescriptorBits; ++i) {
       const PointPair& p = base[static_cast<size_t>(i)];
-      PointPair& r = steered_[static_cast<size_t>(k)][static_cast<size_t>(i)];
-      r.x1 = static_cast<std::int8_t>(round_q16(d.c * p.x1 - d.s * p.y1));
-      r.y1 = static_cast<std::int8_t>(round_q16(d.s * p.x1 + d.c * p.y1));
-      r.x2 = static_cast<std::int8_t>(round_q16(d.c * p.x2 - d.s * p.y2));
-      r.y2 = static_cast<std::int8_t>(round_q16(d.s * p.x2 + d.c * p.y2));
+      const auto offset = [&](int x, int y) {
+        return round_q16(d.s * x + d.c * y) * box_stride_ + round_q16(d.c * x - d.s * y);
+      };
+      steered_offsets_[static_cast<size_t>(k)][static_cast<size_t>(i)] = {offset(p.x1, p.y1), offset(p.x2, p.y2)};
     }
   }
 }
@@ -170,36 +190,20 @@ void GridOrbExtractor::build_pyramid(const cv::Mat& gray) {
     Level& dst = levels_[l];
     std::uint8_t* blended = row_buffer_.data();
     for (int y = 0; y < dst.image.rows; ++y) {
-      // Vertically first, along whole source rows (contiguous: the compiler vectorises it),
-      // then horizontally through the column table. Each pass rounds to 8 bits.
+      // Vertically along whole source rows, then horizontally; each pass rounds to 8 bits.
       const int y0 = dst.y0[static_cast<size_t>(y)];
-      const unsigned wy = dst.wy[static_cast<size_t>(y)];
       const std::uint8_t* r0 = src.image.ptr<std::uint8_t>(y0);
       const std::uint8_t* r1 = src.image.ptr<std::uint8_t>(std::min(y0 + 1, src.image.rows - 1));
-      for (int x = 0; x < src.image.cols; ++x)
-        blended[x] = static_cast<std::uint8_t>((r0[x] * (256 - wy) + r1[x] * wy + 128) >> 8);
-      std::uint8_t* out = dst.image.ptr<std::uint8_t>(y);
-      for (int x = 0; x < dst.image.cols; ++x) {
-        const int x0 = dst.x0[static_cast<size_t>(x)];
-        const unsigned wx = dst.wx[static_cast<size_t>(x)];
-        out[x] = static_cast<std::uint8_t>((blended[x0] * (256 - wx) + blended[x0 + 1] * wx + 128) >> 8);
-      }
+      blend_rows_(r0, r1, src.image.cols, dst.wy[static_cast<size_t>(y)], blended);
+      resample_row_(blended, dst.x_groups.data(), dst.image.cols, dst.image.ptr<std::uint8_t>(y));
     }
   }
   for (Level& L : levels_) {
     const int w = L.image.cols, h = L.image.rows;
-    const size_t stride = static_cast<size_t>(w) + 1;
-    std::uint32_t* I = L.integral.data();
-    for (int y = 0; y < h; ++y) {
-      const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
-      std::uint32_t running = 0;
-      std::uint32_t* above = I + static_cast<size_t>(y) * stride;
-      std::uint32_t* here = above + stride;
-      for (int x = 0; x < w; ++x) {
-        running += row[x];
-        here[x + 1] = above[x + 1] + running;
-      }
-    }
+    if (w < 5) continue;
+    const auto stride = static_cast<std::ptrdiff_t>(L.image.step);
+    for (int y = 2; y < h - 2; ++y)
+      box5_row_(L.image.ptr<std::uint8_t>(y) + 2, stride, w - 4, L.box.data() + static_cast<size_t>(y) * static_cast<size_t>(box_stride_) + 2);
   }
 }
 
@@ -219,6 +223,7 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
     std::uint8_t* flags = row_buffer_.data();
     for (int y = y_begin; y < y_end; ++y) {
       const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
+      const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
       fast9_row_(row + x_begin, stride, x_end - x_begin, t, flags);
       const int n = x_end - x_begin;
       for (int i = 0; i < n; ++i) {
@@ -234,9 +239,7 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
         if (flags[i] == 0) continue;
         const int x = x_begin + i;
         // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
-        const int mx = std::min(static_cast<int>((x + 0.5) * L.scale), mask.cols - 1);
-        const int my = std::min(static_cast<int>((y + 0.5) * L.scale), mask.rows - 1);
-        if (mask.at<std::uint8_t>(my, mx) == 0) continue;
+        if (mask_row[L.mask_x[static_cast<size_t>(x)]] == 0) continue;
         // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score).
         const std::uint8_t* p = row + x;
         const int hi = *p + t, lo = *p - t;
@@ -256,12 +259,11 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
   // Whether a cell of this level sees any of the mask (sampled every 4 level pixels): a cell
   // wholly outside it (no depth, or the periphery) is not searched again at the low threshold.
   const auto cell_in_mask = [&](int xb, int xe, int yb, int ye) {
-    for (int y = yb; y < ye; y += 4)
-      for (int x = xb; x < xe; x += 4) {
-        const int mx = std::min(static_cast<int>((x + 0.5) * L.scale), mask.cols - 1);
-        const int my = std::min(static_cast<int>((y + 0.5) * L.scale), mask.rows - 1);
-        if (mask.at<std::uint8_t>(my, mx) != 0) return true;
-      }
+    for (int y = yb; y < ye; y += 4) {
+      const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
+      for (int x = xb; x < xe; x += 4)
+        if (mask_row[L.mask_x[static_cast<size_t>(x)]] != 0) return true;
+    }
     return false;
   };
 
@@ -364,18 +366,8 @@ float GridOrbExtractor::orientation(const Level& L, int x, int y) const {
   // Intensity centroid: the direction from the keypoint to the disc's centre of brightness,
   // snapped to the nearest of the 30 steps by integer dot products (no atan2: its last bits
   // differ between builds).
-  std::int64_t m10 = 0, m01 = 0;
-  for (int dy = -kOrientationRadius; dy <= kOrientationRadius; ++dy) {
-    const std::uint8_t* row = L.image.ptr<std::uint8_t>(y + dy) + x;
-    const int hw = disc_half_width_[static_cast<size_t>(dy + kOrientationRadius)];
-    std::int64_t row_sum = 0, row_moment = 0;
-    for (int dx = -hw; dx <= hw; ++dx) {
-      row_sum += row[dx];
-      row_moment += dx * row[dx];
-    }
-    m10 += row_moment;
-    m01 += dy * row_sum;
-  }
+  std::int32_t m10 = 0, m01 = 0;
+  disc_moments_(L.image.ptr<std::uint8_t>(y) + x, static_cast<std::ptrdiff_t>(L.image.step), &m10, &m01);
   int best = 0;
   std::int64_t best_dot = std::numeric_limits<std::int64_t>::min();
   for (int k = 0; k < kAngleSteps; ++k) {
@@ -388,26 +380,21 @@ float GridOrbExtractor::orientation(const Level& L, int x, int y) const {
 
 void GridOrbExtractor::describe(const Level& L, int x, int y, float angle_deg, std::uint8_t* out) const {
   const auto step = static_cast<size_t>(std::lround(angle_deg / (360.0f / kAngleSteps))) % kAngleSteps;
-  const auto& pairs = steered_[step];
-  const size_t stride = static_cast<size_t>(L.image.cols) + 1;
-  const std::uint32_t* I = L.integral.data();
-  // Sum of the 5x5 box centred on (x + dx, y + dy): four corners of the integral image.
-  const auto box = [&](int dx, int dy) {
-    const size_t top = static_cast<size_t>(y + dy - kBoxHalf) * stride, bottom = static_cast<size_t>(y + dy + kBoxHalf + 1) * stride;
-    const size_t left = static_cast<size_t>(x + dx - kBoxHalf), right = static_cast<size_t>(x + dx + kBoxHalf + 1);
-    return I[bottom + right] - I[top + right] - I[bottom + left] + I[top + left];
-  };
+  const auto& offsets = steered_offsets_[step];
+  const std::uint16_t* centre = L.box.data() + static_cast<size_t>(y) * static_cast<size_t>(box_stride_) + x;
   for (int byte = 0; byte < kDescriptorBits / 8; ++byte) {
-    std::uint8_t bits = 0;
+    unsigned bits = 0;
     for (int b = 0; b < 8; ++b) {
-      const PointPair& p = pairs[static_cast<size_t>(byte * 8 + b)];
-      bits |= static_cast<std::uint8_t>((box(p.x1, p.y1) < box(p.x2, p.y2)) << b);
+      const auto& o = offsets[static_cast<size_t>(byte * 8 + b)];
+      bits |= static_cast<unsigned>(centre[o[0]] < centre[o[1]]) << b;
     }
-    out[byte] = bits;
+    out[byte] = static_cast<std::uint8_t>(bits);
   }
 }
 
 void GridOrbExtractor::detect(const cv::Mat& gray, const cv::Mat& mask, Features& out) {
+  CV_Assert(gray.type() == CV_8UC1 && gray.cols == width_ && gray.rows == height_);
+  CV_Assert(mask.type() == CV_8UC1 && mask.size() == gray.size());
   out.keypoints.clear();
   if (out.descriptor_storage.rows < config_.max_features || out.descriptor_storage.cols != kDescriptorBits / 8)
     out.descriptor_storage.create(config_.max_features, kDescriptorBits / 8, CV_8UC1);

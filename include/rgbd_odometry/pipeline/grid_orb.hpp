@@ -5,7 +5,9 @@
 // model"); this extractor's hot loops are ours, so they can be.
 //
 //   pyramid       levels 1.. downscaled from the previous level by scale_factor, bilinear in
-//                 fixed point (weights in 1/256), pixel centres aligned
+//                 fixed point (weights in 1/256), pixel centres aligned: a vertical pass over
+//                 whole rows, then a horizontal one gathering eight outputs at a time (SIMD
+//                 kernels, simd/image.hpp)
 //   FAST-9        segment test on each level at fast_threshold; on a level short of corners
 //                 (blur, bare scenes) a grid cell that finds none at it looks again at
 //                 kFastLowThreshold (ORB-SLAM's fallback), so a textureless cell still yields
@@ -14,8 +16,8 @@
 //   spread        each level's budget (ORB-SLAM's geometric split of max_features) goes first
 //                 to the best corner of each grid cell, then to the best of the rest
 //   orientation   intensity centroid over a disc of radius 15 (Rublee et al. 2011)
-//   descriptor    256 intensity comparisons of 5x5 box means (integral image, as the ORB
-//                 paper's sub-windows) at point pairs steered by the orientation in 30 steps
+//   descriptor    256 intensity comparisons of 5x5 box sums (the ORB paper's sub-windows;
+//                 a box-sum image per level, SIMD kernel) at point pairs steered by the orientation in 30 steps
 //                 of 12 degrees; the pairs: a fixed Gaussian pattern (BRIEF G II, sigma 31/5,
 //                 within radius 13) drawn once from the project's RNG (grid_orb.cpp)
 //
@@ -60,14 +62,18 @@ class GridOrbExtractor {
  private:
   struct Level {
     cv::Mat image;                   // CV_8UC1
-    std::vector<std::uint32_t> integral;  // (w + 1) x (h + 1), row-major
+    // 5x5 box sums of the image, rows box_stride_ apart (one stride for every level, so one
+    // table of steered offsets serves them all); 2 pixels from the edges and inwards.
+    std::vector<std::uint16_t> box;
     double scale = 1;                // level-0 pixels per level pixel
     int budget = 0;                  // keypoints wanted from this level
     int cell_px = 32;                // grid cell edge in level pixels
-    // Downscaling tables from the previous level: source index and weight (of the next
-    // pixel, in 1/256) per output column and row.
-    std::vector<int> x0, y0;
-    std::vector<std::uint16_t> wx, wy;
+    // Downscaling from the previous level: per output row its source row and weight (of the
+    // next row, in 1/256); the columns as the horizontal kernel's groups of eight.
+    std::vector<int> y0;
+    std::vector<std::uint16_t> wy;
+    std::vector<simd::ResampleGroup> x_groups;
+    std::vector<int> mask_x, mask_y;  // the level-0 column (row) of each level column (row): mask look-ups
   };
   struct Candidate {
     int x, y;       // level pixels
@@ -85,14 +91,20 @@ class GridOrbExtractor {
   FeatureConfig config_;
   int width_, height_;
   std::vector<Level> levels_;
-  simd::Fast9RowFn fast9_row_;        // the active kernel set's, bound once
+  // The active kernel set's, bound once.
+  simd::Fast9RowFn fast9_row_;
+  simd::BlendRowsFn blend_rows_;
+  simd::ResampleRowFn resample_row_;
+  simd::Box5RowFn box5_row_;
+  simd::DiscMomentsFn disc_moments_;
+  int box_stride_;
   std::vector<std::uint16_t> score_;  // per pixel of the level being detected; 0 = no corner
-  std::vector<std::uint8_t> row_buffer_;  // one level-0 row: FAST flags, or a blended pyramid row
+  std::vector<std::uint8_t> row_buffer_;  // one level-0 row (+16 readable bytes): FAST flags, or a blended pyramid row
   std::vector<Candidate> candidates_, chosen_;
   std::vector<int> cell_best_;
-  std::array<std::array<PointPair, kDescriptorBits>, kAngleSteps> steered_;
+  // Per orientation step and comparison, the offsets of its two boxes in a box image.
+  std::array<std::array<std::array<std::int32_t, 2>, kDescriptorBits>, kAngleSteps> steered_offsets_;
   std::array<int, 16> circle_offset_{};  // FAST circle (radius 3), set per level stride
-  std::vector<int> disc_half_width_;     // orientation disc: half width of each row, radius 15
 };
 
 }  // namespace rgbdo

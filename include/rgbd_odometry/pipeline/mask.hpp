@@ -11,4 +11,7 @@ namespace rgbdo {
 // Writes a CV_8UC1 mask (255 = usable) of depth_m's size into mask; reuses its buffer.
 void build_feature_mask(const cv::Mat& depth_m, const DepthConfig& depth, int border_px, cv::Mat& mask);
 
+// Whether no pixel is usable; stops at the first that is (cv::countNonZero reads them all).
+bool mask_is_empty(const cv::Mat& mask);
+
 }  // namespace rgbdo

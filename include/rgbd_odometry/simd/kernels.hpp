@@ -9,6 +9,7 @@
 #include <string>
 
 #include "rgbd_odometry/simd/fast.hpp"
+#include "rgbd_odometry/simd/image.hpp"
 #include "rgbd_odometry/simd/nearest_two.hpp"
 #include "rgbd_odometry/simd/perturb.hpp"
 #include "rgbd_odometry/simd/score.hpp"
@@ -28,6 +29,12 @@ using ScoreRigidFn = void (*)(const RigidScoreInput& in, int& count, float& cost
 
 using Fast9RowFn = void (*)(const std::uint8_t* row, std::ptrdiff_t stride, int n, int threshold, std::uint8_t* flags);
 
+using BlendRowsFn = void (*)(const std::uint8_t* r0, const std::uint8_t* r1, int n, unsigned w, std::uint8_t* out);
+using ResampleRowFn = void (*)(const std::uint8_t* src, const ResampleGroup* groups, int n, std::uint8_t* out);
+using Box5RowFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, int n, std::uint16_t* out);
+using DepthInRangeRowFn = void (*)(const float* depth, int n, float lo, float hi, std::uint8_t* out);
+using DiscMomentsFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, std::int32_t* m10, std::int32_t* m01);
+
 struct KernelSet {
   const char* name;  // "scalar", "neon", "avx2", ...
   NearestTwoHammingFn nearest_two_hamming;
@@ -35,6 +42,11 @@ struct KernelSet {
   PerturbationSumsFn perturbation_sums;
   ScoreRigidFn score_rigid;
   Fast9RowFn fast9_row;
+  BlendRowsFn blend_rows;
+  ResampleRowFn resample_row;
+  Box5RowFn box5_row;
+  DepthInRangeRowFn depth_in_range_row;
+  DiscMomentsFn disc_moments;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.

@@ -1,0 +1,65 @@
+#pragma once
+// Kernel interfaces for the image work of our feature extractor (pipeline/grid_orb.hpp) and
+// of the feature mask (pipeline/mask.hpp): the pyramid's two resampling passes, the 5x5 box
+// sums the descriptor compares, and the depth range test. Every result is an exact integer
+// (or a boolean of one comparison), so every twin is bit-exact against its scalar reference
+// in simd/scalar/image_scalar.cpp.
+#include <cstddef>
+#include <cstdint>
+
+namespace rgbdo::simd {
+
+// Vertical pass: out[i] = (r0[i] * (256 - w) + r1[i] * w + 128) >> 8, w in [0, 256].
+#define RGBDO_BLEND_ROWS(name) \
+  void name(const std::uint8_t* r0, const std::uint8_t* r1, int n, unsigned w, std::uint8_t* out)
+
+// Horizontal pass, eight outputs per group: for output k of group g (k < 8, g * 8 + k < n),
+//   a = src[base + index[k]], b = src[base + index[k] + 1],
+//   out[g * 8 + k] = (a * (256 - weight[k]) + b * weight[k] + 128) >> 8.
+// index[k] + 1 <= 15 and the caller keeps src readable up to base + 16 of every group, so a
+// twin may load the 16 bytes from base at once (downscaling by at most 2 always fits).
+struct ResampleGroup {
+  std::int32_t base;
+  std::uint8_t index[8];
+  std::uint8_t weight[8];  // of the right-hand pixel, in 1/256
+};
+#define RGBDO_RESAMPLE_ROW(name) \
+  void name(const std::uint8_t* src, const ResampleGroup* groups, int n, std::uint8_t* out)
+
+// 5x5 box sums: out[i] = sum over dy, dx in [-2, 2] of centre[i + dy * stride + dx], for
+// i in [0, n). The caller keeps 2 pixels of image on every side of the run.
+#define RGBDO_BOX5_ROW(name) \
+  void name(const std::uint8_t* centre, std::ptrdiff_t stride, int n, std::uint16_t* out)
+
+// Depth range test: out[i] = 255 when lo <= depth[i] <= hi (cv::inRange's rule), else 0
+// (NaN: 0).
+#define RGBDO_DEPTH_IN_RANGE_ROW(name) \
+  void name(const float* depth, int n, float lo, float hi, std::uint8_t* out)
+
+// Intensity-centroid moments (Rosin; ORB's orientation) over the disc of radius 15:
+//   m10 = sum of dx * I(dx, dy), m01 = sum of dy * I(dx, dy), |dx| <= kDiscHalfWidth15[|dy|].
+// The caller keeps 16 columns left of the centre, 15 right and 15 rows above and below.
+inline constexpr int kDiscRadius = 15;
+inline constexpr int kDiscHalfWidth15[kDiscRadius + 1] = {15, 14, 14, 14, 14, 14, 13, 13, 12, 12, 11, 10, 9, 7, 5, 0};
+#define RGBDO_DISC_MOMENTS(name) \
+  void name(const std::uint8_t* centre, std::ptrdiff_t stride, std::int32_t* m10, std::int32_t* m01)
+
+RGBDO_BLEND_ROWS(blend_rows_scalar);  // the references: simd/scalar/image_scalar.cpp
+RGBDO_RESAMPLE_ROW(resample_row_scalar);
+RGBDO_BOX5_ROW(box5_row_scalar);
+RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_scalar);
+RGBDO_DISC_MOMENTS(disc_moments_scalar);
+
+RGBDO_BLEND_ROWS(blend_rows_sse41);  // simd/x86/image_sse41.cpp (the sse42 and avx2 sets)
+RGBDO_RESAMPLE_ROW(resample_row_sse41);
+RGBDO_BOX5_ROW(box5_row_sse41);
+RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_sse41);
+RGBDO_DISC_MOMENTS(disc_moments_sse41);
+
+RGBDO_BLEND_ROWS(blend_rows_neon);  // simd/arm/image_neon.cpp
+RGBDO_RESAMPLE_ROW(resample_row_neon);
+RGBDO_BOX5_ROW(box5_row_neon);
+RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_neon);
+RGBDO_DISC_MOMENTS(disc_moments_neon);
+
+}  // namespace rgbdo::simd

@@ -1,0 +1,50 @@
+// Reference image kernels (rgbd_odometry/simd/image.hpp): the plain loops of their definitions.
+#include <cstring>
+
+#include "rgbd_odometry/simd/image.hpp"
+
+namespace rgbdo::simd {
+
+RGBDO_BLEND_ROWS(blend_rows_scalar) {
+  for (int i = 0; i < n; ++i) out[i] = static_cast<std::uint8_t>((r0[i] * (256 - w) + r1[i] * w + 128) >> 8);
+}
+
+RGBDO_RESAMPLE_ROW(resample_row_scalar) {
+  for (int i = 0; i < n; ++i) {
+    const ResampleGroup& g = groups[i / 8];
+    const std::uint8_t* p = src + g.base + g.index[i % 8];
+    const unsigned w = g.weight[i % 8];
+    out[i] = static_cast<std::uint8_t>((p[0] * (256 - w) + p[1] * w + 128) >> 8);
+  }
+}
+
+RGBDO_BOX5_ROW(box5_row_scalar) {
+  for (int i = 0; i < n; ++i) {
+    unsigned sum = 0;
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) sum += centre[i + dy * stride + dx];
+    out[i] = static_cast<std::uint16_t>(sum);
+  }
+}
+
+RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_scalar) {
+  for (int i = 0; i < n; ++i) out[i] = depth[i] >= lo && depth[i] <= hi ? 255 : 0;
+}
+
+RGBDO_DISC_MOMENTS(disc_moments_scalar) {
+  std::int32_t sx = 0, sy = 0;
+  for (int dy = -kDiscRadius; dy <= kDiscRadius; ++dy) {
+    const std::uint8_t* row = centre + dy * stride;
+    const int hw = kDiscHalfWidth15[dy < 0 ? -dy : dy];
+    std::int32_t row_sum = 0;
+    for (int dx = -hw; dx <= hw; ++dx) {
+      row_sum += row[dx];
+      sx += dx * row[dx];
+    }
+    sy += dy * row_sum;
+  }
+  *m10 = sx;
+  *m01 = sy;
+}
+
+}  // namespace rgbdo::simd

@@ -1,0 +1,176 @@
+// The image kernels (rgbd_odometry/simd/image.hpp): every compiled set this CPU supports
+// against the scalar reference, byte for byte, at run lengths around the vector widths, at
+// the weights' ends and on the floats a NEON compare would get wrong (denormals, -0, NaN);
+// and the references against independent definitions (OpenCV's integral image and inRange).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "runnable_kernel_sets.hpp"
+
+namespace rgbdo {
+namespace {
+
+std::vector<std::uint8_t> random_bytes(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::uint8_t> v(n);
+  for (auto& b : v) b = static_cast<std::uint8_t>(rng());
+  return v;
+}
+
+constexpr int kRunLengths[] = {0, 1, 7, 8, 9, 15, 16, 17, 31, 33, 100, 533};
+
+TEST(ImageKernels, BlendRowsIsTheRoundedWeightedMeanInEverySet) {
+  const auto r0 = random_bytes(600, 1), r1 = random_bytes(600, 2);
+  for (const auto* set : runnable_sets())
+    for (unsigned w : {0u, 1u, 77u, 128u, 255u, 256u})
+      for (int n : kRunLengths) {
+        std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
+        set->blend_rows(r0.data() + 1, r1.data() + 3, n, w, got.data());
+        for (int i = 0; i < n; ++i) {
+          const double exact = (r0[static_cast<size_t>(i) + 1] * (256.0 - w) + r1[static_cast<size_t>(i) + 3] * w) / 256.0;
+          ASSERT_EQ(got[static_cast<size_t>(i)], static_cast<int>(std::floor(exact + 0.5)))
+              << set->name << " w " << w << " n " << n << " i " << i;
+        }
+        EXPECT_EQ(got.back(), 0xAB) << set->name << " wrote past n";
+      }
+}
+
+TEST(ImageKernels, ResampleRowGathersAndBlendsAsTheReference) {
+  std::mt19937 rng(3);
+  const auto src = random_bytes(2000, 4);
+  for (int n : kRunLengths) {
+    // Groups as a downscale by 1.01 to 2 makes them: increasing bases, indices up to 14.
+    std::vector<simd::ResampleGroup> groups(static_cast<size_t>((n + 7) / 8));
+    int base = 0;
+    for (auto& g : groups) {
+      g.base = base;
+      int x = static_cast<int>(rng() % 2);
+      for (int k = 0; k < 8; ++k) {
+        g.index[k] = static_cast<std::uint8_t>(x);
+        g.weight[k] = static_cast<std::uint8_t>(k == 0 ? 0 : k == 1 ? 255 : rng() % 256);
+        x = std::min(x + 1 + static_cast<int>(rng() % 2), 14);
+      }
+      base += 10 + static_cast<int>(rng() % 5);
+    }
+    std::vector<std::uint8_t> want(static_cast<size_t>(n) + 1, 0xAB);
+    simd::resample_row_scalar(src.data(), groups.data(), n, want.data());
+    for (int i = 0; i < n; ++i) {
+      const auto& g = groups[static_cast<size_t>(i / 8)];
+      const int a = src[static_cast<size_t>(g.base + g.index[i % 8])], b = src[static_cast<size_t>(g.base + g.index[i % 8] + 1)];
+      const int w = g.weight[i % 8];
+      ASSERT_EQ(want[static_cast<size_t>(i)], (a * (256 - w) + b * w + 128) >> 8);
+    }
+    for (const auto* set : runnable_sets()) {
+      std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
+      set->resample_row(src.data(), groups.data(), n, got.data());
+      EXPECT_EQ(got, want) << set->name << " n " << n;
+    }
+  }
+}
+
+TEST(ImageKernels, Box5RowSumsTheFiveByFiveNeighbourhood) {
+  cv::Mat image(9, 560, CV_8UC1);
+  cv::randu(image, 0, 256);
+  image.row(4).colRange(100, 140).setTo(255);  // the largest sums: 25 * 255 fits 16 bits
+  image.rowRange(2, 7).colRange(100, 140).setTo(255);
+  cv::Mat integral;
+  cv::integral(image, integral, CV_32S);
+  for (int start : {2, 3, 5, 11}) {
+    for (int n : kRunLengths) {
+      if (start + n + 2 > image.cols) continue;
+      const std::uint8_t* centre = image.ptr<std::uint8_t>(4) + start;
+      std::vector<std::uint16_t> want(static_cast<size_t>(n) + 1, 0xABCD);
+      simd::box5_row_scalar(centre, static_cast<std::ptrdiff_t>(image.step), n, want.data());
+      for (int i = 0; i < n; ++i) {
+        const int x = start + i;
+        const int sum = integral.at<int>(7, x + 3) - integral.at<int>(2, x + 3) - integral.at<int>(7, x - 2) + integral.at<int>(2, x - 2);
+        ASSERT_EQ(want[static_cast<size_t>(i)], sum) << "start " << start << " i " << i;
+      }
+      for (const auto* set : runnable_sets()) {
+        std::vector<std::uint16_t> got(static_cast<size_t>(n) + 1, 0xABCD);
+        set->box5_row(centre, static_cast<std::ptrdiff_t>(image.step), n, got.data());
+        EXPECT_EQ(got, want) << set->name << " start " << start << " n " << n;
+      }
+    }
+  }
+}
+
+TEST(ImageKernels, DepthInRangeFollowsInRangeOnEveryFloat) {
+  const float denormal = std::numeric_limits<float>::denorm_min();
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  std::vector<float> depth = {0.0f, -0.0f, denormal, -denormal, 1e-39f, -1e-39f, 0.5f, 0.4f, 4.0f, 4.0000005f,
+                              nan, -nan, inf, -inf, 1.0f, 3.9999998f, 0.49999997f, 100.0f, -1.0f};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 6.0f);
+  while (depth.size() < 203) depth.push_back(u(rng));
+  for (const auto& [lo, hi] : {std::pair{0.5f, 4.0f}, std::pair{0.0f, 4.0f}, std::pair{denormal, 0.5f}}) {
+    for (int n : {0, 1, 7, 8, 9, 16, 17, 19, 33, 203}) {
+      std::vector<std::uint8_t> want(static_cast<size_t>(n) + 1, 0xAB);
+      simd::depth_in_range_row_scalar(depth.data(), n, lo, hi, want.data());
+      for (int i = 0; i < n; ++i) {
+        const float d = depth[static_cast<size_t>(i)];
+        ASSERT_EQ(want[static_cast<size_t>(i)], (d >= lo && d <= hi) ? 255 : 0) << d;
+      }
+      if (n > 0) {
+        // OpenCV's own rule for the finite values (its NaN handling is its own business).
+        cv::Mat in(1, n, CV_32FC1, depth.data()), mask;
+        cv::inRange(in, lo, hi, mask);
+        for (int i = 0; i < n; ++i) {
+          if (!std::isfinite(depth[static_cast<size_t>(i)])) continue;
+          ASSERT_EQ(mask.at<std::uint8_t>(0, i), want[static_cast<size_t>(i)]) << depth[static_cast<size_t>(i)];
+        }
+      }
+      for (const auto* set : runnable_sets()) {
+        std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
+        set->depth_in_range_row(depth.data(), n, lo, hi, got.data());
+        EXPECT_EQ(got, want) << set->name << " lo " << lo << " n " << n;
+      }
+    }
+  }
+}
+
+TEST(ImageKernels, DiscMomentsAreTheIntensityCentroidSums) {
+  // Random texture, a saturated patch (the largest sums) and a ramp (a known centroid
+  // direction), at centres whose disc touches the allowed margins.
+  cv::Mat image(64, 80, CV_8UC1);
+  cv::randu(image, 0, 256);
+  image(cv::Rect(40, 20, 30, 30)).setTo(255);
+  for (int y = 0; y < 64; ++y) image.at<std::uint8_t>(y, 79) = 0;
+  for (const auto& [cx, cy] : {std::pair{16, 15}, std::pair{64, 48}, std::pair{50, 30}, std::pair{33, 33}}) {
+    const std::uint8_t* centre = image.ptr<std::uint8_t>(cy) + cx;
+    std::int32_t want10 = 0, want01 = 0;
+    for (int dy = -15; dy <= 15; ++dy)
+      for (int dx = -15; dx <= 15; ++dx)
+        if (dx * dx + dy * dy <= 225) {
+          want10 += dx * image.at<std::uint8_t>(cy + dy, cx + dx);
+          want01 += dy * image.at<std::uint8_t>(cy + dy, cx + dx);
+        }
+    for (const auto* set : runnable_sets()) {
+      std::int32_t m10 = 7, m01 = 7;
+      set->disc_moments(centre, static_cast<std::ptrdiff_t>(image.step), &m10, &m01);
+      EXPECT_EQ(m10, want10) << set->name << " at " << cx << "," << cy;
+      EXPECT_EQ(m01, want01) << set->name << " at " << cx << "," << cy;
+    }
+  }
+  // A horizontal ramp: the centroid lies to the right (m10 > 0), level (m01 = 0).
+  cv::Mat ramp(40, 40, CV_8UC1);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) ramp.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(5 * x);
+  for (const auto* set : runnable_sets()) {
+    std::int32_t m10 = 0, m01 = 7;
+    set->disc_moments(ramp.ptr<std::uint8_t>(20) + 20, static_cast<std::ptrdiff_t>(ramp.step), &m10, &m01);
+    EXPECT_GT(m10, 0) << set->name;
+    EXPECT_EQ(m01, 0) << set->name;
+  }
+}
+
+}  // namespace
+}  // namespace rgbdo
