@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
@@ -169,6 +170,53 @@ TEST(ImageKernels, DiscMomentsAreTheIntensityCentroidSums) {
     set->disc_moments(ramp.ptr<std::uint8_t>(20) + 20, static_cast<std::ptrdiff_t>(ramp.step), &m10, &m01);
     EXPECT_GT(m10, 0) << set->name;
     EXPECT_EQ(m01, 0) << set->name;
+  }
+}
+
+TEST(ImageKernels, ColourToGrayIsOpenCvsConversion) {
+  // Random colours, the extremes, and a real frame of the bundled recording; both channel
+  // orders; run lengths around the vector width.
+  cv::Mat colour(7, 533, CV_8UC3);
+  cv::randu(colour, 0, 256);
+  colour.row(0).setTo(cv::Scalar(255, 255, 255));
+  colour.row(1).setTo(cv::Scalar(0, 0, 0));
+  const cv::Mat real = cv::imread(RGBDO_TEST_DATA_DIR "/rgb/1305031102.175304.png", cv::IMREAD_COLOR);
+  ASSERT_FALSE(real.empty());
+  for (const cv::Mat* image : {static_cast<const cv::Mat*>(&colour), &real})
+    for (const bool red_first : {false, true}) {
+      cv::Mat want;
+      cv::cvtColor(*image, want, red_first ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
+      for (const auto* set : runnable_sets())
+        for (int n : {0, 1, 7, 8, 9, 17, image->cols}) {
+          std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
+          for (int y = 0; y < image->rows; ++y) {
+            set->colour_to_gray_row(image->ptr<std::uint8_t>(y), n, red_first, got.data());
+            for (int i = 0; i < n; ++i)
+              ASSERT_EQ(got[static_cast<size_t>(i)], want.at<std::uint8_t>(y, i)) << set->name << " row " << y << " i " << i;
+            ASSERT_EQ(got.back(), 0xAB);
+          }
+        }
+    }
+}
+
+TEST(ImageKernels, DepthToMetresIsConvertTosProduct) {
+  cv::Mat raw(3, 203, CV_16UC1);
+  cv::randu(raw, 0, 65536);
+  raw.at<std::uint16_t>(0, 0) = 0;
+  raw.at<std::uint16_t>(0, 1) = 65535;
+  for (const double units_per_m : {5000.0, 1000.0, 1e6, 1e-3, 3.7}) {
+    cv::Mat want;
+    raw.convertTo(want, CV_32F, 1.0 / units_per_m);
+    for (const auto* set : runnable_sets())
+      for (int n : {0, 1, 7, 8, 9, 203}) {
+        std::vector<float> got(static_cast<size_t>(n) + 1, -1.0f);
+        for (int y = 0; y < raw.rows; ++y) {
+          set->depth_to_metres_row(raw.ptr<std::uint16_t>(y), n, static_cast<float>(1.0 / units_per_m), got.data());
+          for (int i = 0; i < n; ++i)
+            ASSERT_EQ(got[static_cast<size_t>(i)], want.at<float>(y, i)) << set->name << " " << units_per_m << " i " << i;
+          ASSERT_EQ(got.back(), -1.0f);
+        }
+      }
   }
 }
 

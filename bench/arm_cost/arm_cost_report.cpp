@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
     for (const CostStage s : stages) t += per_frame[static_cast<std::size_t>(s)];
     return t;
   };
-  const double extraction = sum({CostStage::Mask, CostStage::Pyramid, CostStage::Corners, CostStage::Detect, CostStage::Geometry});
+  const double extraction = sum({CostStage::Convert, CostStage::Mask, CostStage::Pyramid, CostStage::Corners, CostStage::Detect, CostStage::Geometry});
   const double estimation = sum({CostStage::Match, CostStage::PointPairs, CostStage::Ransac, CostStage::Covariance});
   const double other = per_frame[static_cast<std::size_t>(CostStage::Other)];
   const double two_cores = std::max(extraction, estimation) + other;

@@ -104,6 +104,36 @@ RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_neon) {
 }
 
 // m10 = sum (dx + 16) I - 16 sum I: unsigned products for VMULL.
+RGBDO_COLOUR_TO_GRAY_ROW(colour_to_gray_row_neon) {
+  const std::uint16_t first = red_first ? kGrayRed : kGrayBlue, third = red_first ? kGrayBlue : kGrayRed;
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const uint8x8x3_t px = vld3_u8(pixels + 3 * i);  // de-interleaved channels
+    const uint16x8_t c0 = vmovl_u8(px.val[0]), c1 = vmovl_u8(px.val[1]), c2 = vmovl_u8(px.val[2]);
+    uint32x4_t lo = vmull_n_u16(vget_low_u16(c0), first), hi = vmull_n_u16(vget_high_u16(c0), first);
+    lo = vmlal_n_u16(lo, vget_low_u16(c1), static_cast<std::uint16_t>(kGrayGreen));
+    hi = vmlal_n_u16(hi, vget_high_u16(c1), static_cast<std::uint16_t>(kGrayGreen));
+    lo = vmlal_n_u16(lo, vget_low_u16(c2), third);
+    hi = vmlal_n_u16(hi, vget_high_u16(c2), third);
+    // + 2^14, >> 15 (VRSHRN): at most 255, so the narrowing is exact.
+    vst1_u8(out + i, vmovn_u16(vcombine_u16(vrshrn_n_u32(lo, 15), vrshrn_n_u32(hi, 15))));
+  }
+  colour_to_gray_row_scalar(pixels + 3 * i, n - i, red_first, out + i);
+}
+
+RGBDO_DEPTH_TO_METRES_ROW(depth_to_metres_row_neon) {
+  // Readings up to 65535 times a scale of 1e-6..1e3 (the configuration's range): no product
+  // is a denormal, which NEON alone would flush.
+  const float32x4_t scale = vdupq_n_f32(metres_per_unit);
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    const uint16x8_t r = vld1q_u16(raw + i);
+    vst1q_f32(out + i, vmulq_f32(vcvtq_f32_u32(vmovl_u16(vget_low_u16(r))), scale));
+    vst1q_f32(out + i + 4, vmulq_f32(vcvtq_f32_u32(vmovl_u16(vget_high_u16(r))), scale));
+  }
+  depth_to_metres_row_scalar(raw + i, n - i, metres_per_unit, out + i);
+}
+
 RGBDO_DISC_MOMENTS(disc_moments_neon) {
   static const std::uint8_t weights[32] = {0,  1,  2,  3,  4,  5,  6,  7,  8,  9,  10, 11, 12, 13, 14, 15,
                                            16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31};

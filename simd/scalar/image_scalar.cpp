@@ -47,4 +47,16 @@ RGBDO_DISC_MOMENTS(disc_moments_scalar) {
   *m01 = sy;
 }
 
+RGBDO_COLOUR_TO_GRAY_ROW(colour_to_gray_row_scalar) {
+  const std::uint32_t first = red_first ? kGrayRed : kGrayBlue, third = red_first ? kGrayBlue : kGrayRed;
+  for (int i = 0; i < n; ++i) {
+    const std::uint8_t* p = pixels + 3 * i;
+    out[i] = static_cast<std::uint8_t>((p[0] * first + p[1] * kGrayGreen + p[2] * third + (1u << 14)) >> 15);
+  }
+}
+
+RGBDO_DEPTH_TO_METRES_ROW(depth_to_metres_row_scalar) {
+  for (int i = 0; i < n; ++i) out[i] = static_cast<float>(raw[i]) * metres_per_unit;
+}
+
 }  // namespace rgbdo::simd

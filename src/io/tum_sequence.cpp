@@ -1,13 +1,13 @@
 #include "rgbd_odometry/io/tum_sequence.hpp"
 
 #include "rgbd_odometry/core/cost_stage.hpp"
+#include "rgbd_odometry/pipeline/frame_convert.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include "rgbd_odometry/core/time_format.hpp"
 
@@ -152,12 +152,16 @@ RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int e
     f.depth_m.release();
     return f;
   };
-  // Decoded in colour and converted by OpenCV, exactly as frames from a live RGB sensor are
-  // (libpng's own grey conversion differs in many pixels): replay and live agree.
+  // Decoded in colour and converted as frames from a live RGB sensor are (libpng's own grey
+  // conversion differs in many pixels): replay and live agree.
   cv::Mat colour;
   try {
-    colour = cv::imread(ref.colour_path, cv::IMREAD_COLOR);
-    if (!colour.empty()) cv::cvtColor(colour, colour, cv::COLOR_BGR2GRAY);
+    const cv::Mat bgr = cv::imread(ref.colour_path, cv::IMREAD_COLOR);
+    if (!bgr.empty()) {
+      mark_cost_stage(CostStage::Convert);
+      colour_to_gray(bgr, false, colour);
+      mark_cost_stage(CostStage::Decode);
+    }
   } catch (const cv::Exception& e) {
     return fail(Status::BadFrame, "cannot decode colour image '" + ref.colour_path + "': " + e.what());
   }
@@ -180,7 +184,8 @@ RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int e
     return fail(Status::BadFrame, "depth image '" + ref.depth_path + "' is not 16-bit single-channel");
   if (raw.size() != colour.size())
     return fail(Status::BadFrame, "depth image '" + ref.depth_path + "' does not match the colour image size");
-  raw.convertTo(f.depth_m, CV_32F, 1.0 / depth_units_per_m);
+  mark_cost_stage(CostStage::Convert);
+  depth_to_metres(raw, 1.0 / depth_units_per_m, f.depth_m);
   return f;
 }
 

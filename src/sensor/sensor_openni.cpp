@@ -6,10 +6,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "rgbd_odometry/core/clock.hpp"
+#include "rgbd_odometry/pipeline/frame_convert.hpp"
 #include "rgbd_odometry/sensor/device_clock.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"  // SourceError
 
@@ -251,7 +251,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
       slot.t_ns = t;
       const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
                         static_cast<size_t>(frame.getStrideInBytes()));
-      raw.convertTo(slot.depth_m, CV_32F, s.depth_m_per_unit);
+      depth_to_metres(raw, s.depth_m_per_unit, slot.depth_m);
       continue;
     }
     // A colour frame in hand that is still waiting for its depth is replaced by this newer
@@ -262,7 +262,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     s.last_colour_index = index;
     const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                       static_cast<size_t>(frame.getStrideInBytes()));
-    cv::cvtColor(rgb, out.gray, cv::COLOR_RGB2GRAY);
+    colour_to_gray(rgb, true, out.gray);
     ++s.colour_frames_read;
     have_colour = true;
     colour_t = t;

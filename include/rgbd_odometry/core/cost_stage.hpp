@@ -25,10 +25,12 @@ enum class CostStage : std::uint32_t {
   Covariance,  // the perturbations
   Pyramid,     // detection, our extractor: the image pyramid and its descriptor smoothing
   Corners,     // detection, our extractor: segment test, score, suppression, spread over cells
+  Convert,     // colour to intensity, depth to metres: what a live frame needs too
 };
-inline constexpr std::size_t kCostStageCount = 11;
+inline constexpr std::size_t kCostStageCount = 12;
 inline constexpr std::array<const char*, kCostStageCount> kCostStageNames{
-    "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance", "pyramid", "corners"};
+    "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance", "pyramid", "corners",
+    "convert"};
 // The first extra argument of the marker call ("RGBD"): tells a marker from a real getpid.
 inline constexpr std::uint32_t kCostMarkerMagic = 0x52474244u;
 

@@ -36,6 +36,20 @@ struct ResampleGroup {
 #define RGBDO_DEPTH_IN_RANGE_ROW(name) \
   void name(const float* depth, int n, float lo, float hi, std::uint8_t* out)
 
+// Colour to intensity as OpenCV's cvtColor(..., COLOR_BGR2GRAY / COLOR_RGB2GRAY) computes it
+// for 8-bit images (OpenCV 4's fixed point, 15 fraction bits: 0.299 R + 0.587 G + 0.114 B,
+// checked against cvtColor by test_image_kernels), so that
+// replays and live frames keep OpenCV's grey values; pixels are 3 bytes, blue first unless
+// red_first.
+inline constexpr std::uint32_t kGrayRed = 9798, kGrayGreen = 19235, kGrayBlue = 3735;  // sum 2^15
+#define RGBDO_COLOUR_TO_GRAY_ROW(name) \
+  void name(const std::uint8_t* pixels, int n, bool red_first, std::uint8_t* out)
+
+// Depth readings to metres: out[i] = float(raw[i]) * metres_per_unit, one float product (as
+// cv::Mat::convertTo to CV_32F with that scale computes it).
+#define RGBDO_DEPTH_TO_METRES_ROW(name) \
+  void name(const std::uint16_t* raw, int n, float metres_per_unit, float* out)
+
 // Intensity-centroid moments (Rosin; ORB's orientation) over the disc of radius 15:
 //   m10 = sum of dx * I(dx, dy), m01 = sum of dy * I(dx, dy), |dx| <= kDiscHalfWidth15[|dy|].
 // The caller keeps 16 columns left of the centre, 15 right and 15 rows above and below.
@@ -49,6 +63,8 @@ RGBDO_RESAMPLE_ROW(resample_row_scalar);
 RGBDO_BOX5_ROW(box5_row_scalar);
 RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_scalar);
 RGBDO_DISC_MOMENTS(disc_moments_scalar);
+RGBDO_COLOUR_TO_GRAY_ROW(colour_to_gray_row_scalar);  // also the x86 sets' (not the target's hot path)
+RGBDO_DEPTH_TO_METRES_ROW(depth_to_metres_row_scalar);
 
 RGBDO_BLEND_ROWS(blend_rows_sse41);  // simd/x86/image_sse41.cpp (the sse42 and avx2 sets)
 RGBDO_RESAMPLE_ROW(resample_row_sse41);
@@ -61,5 +77,7 @@ RGBDO_RESAMPLE_ROW(resample_row_neon);
 RGBDO_BOX5_ROW(box5_row_neon);
 RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_neon);
 RGBDO_DISC_MOMENTS(disc_moments_neon);
+RGBDO_COLOUR_TO_GRAY_ROW(colour_to_gray_row_neon);
+RGBDO_DEPTH_TO_METRES_ROW(depth_to_metres_row_neon);
 
 }  // namespace rgbdo::simd

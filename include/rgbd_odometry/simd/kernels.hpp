@@ -33,6 +33,8 @@ using BlendRowsFn = void (*)(const std::uint8_t* r0, const std::uint8_t* r1, int
 using ResampleRowFn = void (*)(const std::uint8_t* src, const ResampleGroup* groups, int n, std::uint8_t* out);
 using Box5RowFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, int n, std::uint16_t* out);
 using DepthInRangeRowFn = void (*)(const float* depth, int n, float lo, float hi, std::uint8_t* out);
+using ColourToGrayRowFn = void (*)(const std::uint8_t* pixels, int n, bool red_first, std::uint8_t* out);
+using DepthToMetresRowFn = void (*)(const std::uint16_t* raw, int n, float metres_per_unit, float* out);
 using DiscMomentsFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, std::int32_t* m10, std::int32_t* m01);
 
 struct KernelSet {
@@ -47,6 +49,8 @@ struct KernelSet {
   Box5RowFn box5_row;
   DepthInRangeRowFn depth_in_range_row;
   DiscMomentsFn disc_moments;
+  ColourToGrayRowFn colour_to_gray_row;
+  DepthToMetresRowFn depth_to_metres_row;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.
