@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <random>
 
+#include "paper_reproduction.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/core/noise_model.hpp"
 
@@ -54,36 +55,9 @@ BENCHMARK(BM_Covariance_Batched)->Unit(benchmark::kMicrosecond);
 
 void BM_Covariance_EigenUmeyamaLoop(benchmark::State& state) {
   const auto& s = inliers();
-  Eigen::Matrix3Xd src(3, kPairs), dst(3, kPairs), sigma_src(3, kPairs), sigma_dst(3, kPairs);
-  for (int k = 0; k < kPairs; ++k) {
-    src.col(k) = s.curr[static_cast<size_t>(k)];
-    dst.col(k) = s.prev[static_cast<size_t>(k)];
-    sigma_src.col(k) = point_sigma(s.curr[static_cast<size_t>(k)], 1.425e-3);
-    sigma_dst.col(k) = point_sigma(s.prev[static_cast<size_t>(k)], 1.425e-3);
-  }
   std::mt19937_64 rng(1);
-  std::normal_distribution<double> gauss(0.0, 1.0);
   for (auto _ : state) {
-    std::vector<Vector6d> xs;
-    for (int p = 0; p < kPerturbations; ++p) {
-      Eigen::Matrix3Xd noisy_src = src, noisy_dst = dst;
-      for (int k = 0; k < kPairs; ++k)
-        for (int c = 0; c < 3; ++c) {
-          noisy_src(c, k) += sigma_src(c, k) * gauss(rng);
-          noisy_dst(c, k) += sigma_dst(c, k) * gauss(rng);
-        }
-      const Eigen::Matrix4d T = Eigen::umeyama(noisy_src, noisy_dst, false);
-      Vector6d xi;
-      xi.head<3>() = T.topRightCorner<3, 1>();
-      const Eigen::AngleAxisd aa(Eigen::Matrix3d(T.topLeftCorner<3, 3>()));
-      xi.tail<3>() = aa.axis() * aa.angle();
-      xs.push_back(xi);
-    }
-    Vector6d mean = Vector6d::Zero();
-    for (const auto& x : xs) mean += x;
-    mean /= kPerturbations;
-    Matrix6d c = Matrix6d::Zero();
-    for (const auto& x : xs) c += (x - mean) * (x - mean).transpose();
+    const Matrix6d c = straightforward_covariance(s.prev, s.curr, 1.425e-3, kPerturbations, rng);
     benchmark::DoNotOptimize(c.data());
   }
   state.counters["perturbations/s"] =

@@ -24,7 +24,7 @@ cv::Ptr<cv::Feature2D> create_feature2d(const std::string& name, const FeatureCo
 
 }  // namespace
 
-FeatureDetector::FeatureDetector(const FeatureConfig& config) : config_(config) {
+FeatureDetector::FeatureDetector(const FeatureConfig& config, TaskRunner* runner) : config_(config), runner_(runner) {
   if (config.detector == kGridOrb) return;  // its own descriptors (validate() insists)
   detector_ = create_feature2d(config.detector, config);
   descriptor_ = config.descriptor == config.detector ? detector_ : create_feature2d(config.descriptor, config);
@@ -38,7 +38,7 @@ FeatureDetector& FeatureDetector::operator=(FeatureDetector&&) noexcept = defaul
 void FeatureDetector::detect(const cv::Mat& gray, const cv::Mat& mask, Features& out) {
   if (config_.detector == kGridOrb) {
     if (!grid_orb_ || !grid_orb_->sized_for(gray.cols, gray.rows))
-      grid_orb_ = std::make_unique<GridOrbExtractor>(config_, gray.cols, gray.rows);
+      grid_orb_ = std::make_unique<GridOrbExtractor>(config_, gray.cols, gray.rows, runner_);
     grid_orb_->detect(gray, mask, out);
     return;
   }

@@ -7,11 +7,11 @@
 
 namespace rgbdo {
 
-FrameExtractor::FrameExtractor(const Config& config)
+FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
     : depth_(config.depth),
       border_px_(config.features.border_px),
       min_features_(config.ransac.min_inliers),
-      detector_(config.features),
+      detector_(config.features, runner),
       backprojector_(config.camera, config.depth) {}
 
 void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {

@@ -92,7 +92,7 @@ const std::array<GridOrbExtractor::PointPair, GridOrbExtractor::kDescriptorBits>
   return p;
 }
 
-GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int height)
+GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int height, TaskRunner* runner)
     : config_(config),
       width_(width),
       height_(height),
@@ -101,7 +101,8 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
       resample_row_(simd::active_kernels().resample_row),
       box5_row_(simd::active_kernels().box5_row),
       disc_moments_(simd::active_kernels().disc_moments),
-      box_stride_(width) {
+      box_stride_(width),
+      runner_(runner) {
   const int n_levels = config.orb_levels;
   const double factor = 1.0 / config.orb_scale_factor;
   levels_.resize(static_cast<size_t>(n_levels));
@@ -160,15 +161,20 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
     }
     scale *= config.orb_scale_factor;
   }
-  score_.assign(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
   row_buffer_.assign(static_cast<size_t>(width) + 16, 0);  // + what a resampling kernel may read past a row
   // Bounds fixed here, so detection never allocates: corners before suppression at most one
-  // pixel in four of level 0 (a real image has a few per cent; only noise reaches it, and the
+  // pixel in four of a level (a real image has a few per cent; only noise reaches it, and the
   // scan then stops), cells as many as the smallest cell makes.
-  candidates_.reserve(static_cast<size_t>(width) * static_cast<size_t>(height) / 4);
   const size_t max_cells = static_cast<size_t>(width / kMinCellPx + 1) * static_cast<size_t>(height / kMinCellPx + 1);
   cell_best_.reserve(max_cells);
-  chosen_.reserve(max_cells + static_cast<size_t>(config.max_features));
+  for (Level& L : levels_) {
+    const auto pixels = static_cast<size_t>(L.image.cols) * static_cast<size_t>(L.image.rows);
+    L.candidates.reserve(pixels / 4);
+    L.chosen.reserve(max_cells + static_cast<size_t>(config.max_features));
+    L.score.assign(pixels, 0);
+    L.flags.assign(static_cast<size_t>(L.image.cols), 0);
+    L.cell_has.reserve(max_cells);
+  }
   // The pattern steered to every orientation step, rounded in integers, as offsets in a box image.
   const auto& base = pattern();
   for (int k = 0; k < kAngleSteps; ++k) {
@@ -198,29 +204,30 @@ void GridOrbExtractor::build_pyramid(const cv::Mat& gray) {
       resample_row_(blended, dst.x_groups.data(), dst.image.cols, dst.image.ptr<std::uint8_t>(y));
     }
   }
-  for (Level& L : levels_) {
-    const int w = L.image.cols, h = L.image.rows;
-    if (w < 5) continue;
-    const auto stride = static_cast<std::ptrdiff_t>(L.image.step);
-    for (int y = 2; y < h - 2; ++y)
-      box5_row_(L.image.ptr<std::uint8_t>(y) + 2, stride, w - 4, L.box.data() + static_cast<size_t>(y) * static_cast<size_t>(box_stride_) + 2);
-  }
 }
 
-void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
-  const Level& L = levels_[static_cast<size_t>(level)];
+void GridOrbExtractor::build_box_sums(Level& L) const {
+  const int w = L.image.cols, h = L.image.rows;
+  if (w < 5) return;
+  const auto stride = static_cast<std::ptrdiff_t>(L.image.step);
+  for (int y = 2; y < h - 2; ++y)
+    box5_row_(L.image.ptr<std::uint8_t>(y) + 2, stride, w - 4, L.box.data() + static_cast<size_t>(y) * static_cast<size_t>(box_stride_) + 2);
+}
+
+void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
   const int w = L.image.cols, h = L.image.rows;
   const auto stride = static_cast<int>(L.image.step);
-  for (int k = 0; k < 16; ++k) circle_offset_[static_cast<size_t>(k)] = simd::kFastCircle[k][1] * stride + simd::kFastCircle[k][0];
+  std::array<int, 16> circle_offset{};  // FAST circle (radius 3) at this level's stride
+  for (int k = 0; k < 16; ++k) circle_offset[static_cast<size_t>(k)] = simd::kFastCircle[k][1] * stride + simd::kFastCircle[k][0];
   const int cells_x = (w - 2 * kBorder + L.cell_px - 1) / L.cell_px;
   const int cells_y = (h - 2 * kBorder + L.cell_px - 1) / L.cell_px;
-  cell_best_.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), -1);
-  candidates_.clear();
+  std::vector<Candidate>& candidates = L.candidates;
+  candidates.clear();
 
   // The segment test at threshold t over [x_begin, x_end) x [y_begin, y_end) (the active SIMD
   // kernel flags the corners), then each corner's mask and score; appends the corners.
   const auto segment_test = [&](int t, int x_begin, int x_end, int y_begin, int y_end, bool strong) {
-    std::uint8_t* flags = row_buffer_.data();
+    std::uint8_t* flags = L.flags.data();
     for (int y = y_begin; y < y_end; ++y) {
       const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
       const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
@@ -245,14 +252,14 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
         const int hi = *p + t, lo = *p - t;
         int excess_bright = 0, excess_dark = 0;
         for (int k = 0; k < 16; ++k) {
-          const int v = p[circle_offset_[static_cast<size_t>(k)]];
+          const int v = p[circle_offset[static_cast<size_t>(k)]];
           excess_bright += std::max(v - hi, 0);
           excess_dark += std::max(lo - v, 0);
         }
         const int score = std::max((flags[i] & 1) ? excess_bright : 0, (flags[i] & 2) ? excess_dark : 0) + 1;
         // Bounded (sized at construction: no allocation); only noise fills it.
-        if (candidates_.size() == candidates_.capacity()) return;
-        candidates_.push_back({x, y, score, strong});
+        if (candidates.size() == candidates.capacity()) return;
+        candidates.push_back({x, y, score, strong});
       }
     }
   };
@@ -274,10 +281,11 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
   // fr1_xyz, its weak corners cost ~23 M ARM instructions per frame and made the odometry no
   // better. When blur or a bare scene leaves fewer than kFallbackMargin corners per keypoint
   // wanted, cells without a corner look again at the low threshold (ORB-SLAM's fallback).
-  const auto nms = [&] { suppress_non_maxima(level); };
-  if (candidates_.size() >= static_cast<size_t>(kFallbackMargin * std::max(L.budget, 1))) return nms();
-  std::vector<int>& has = cell_best_;  // reused as "cell has a strong corner" (1) here
-  for (const Candidate& c : candidates_)
+  const auto nms = [&] { suppress_non_maxima(L); };
+  if (candidates.size() >= static_cast<size_t>(kFallbackMargin * std::max(L.budget, 1))) return nms();
+  std::vector<int>& has = L.cell_has;
+  has.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), 0);
+  for (const Candidate& c : candidates)
     has[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)] = 1;
   for (int cy = 0; cy < cells_y; ++cy)
     for (int cx = 0; cx < cells_x; ++cx) {
@@ -290,26 +298,29 @@ void GridOrbExtractor::detect_level(int level, const cv::Mat& mask) {
   nms();
 }
 
-void GridOrbExtractor::suppress_non_maxima(int level) {
-  const int w = levels_[static_cast<size_t>(level)].image.cols;
+void GridOrbExtractor::suppress_non_maxima(Level& L) const {
+  const int w = L.image.cols;
+  std::vector<Candidate>& candidates = L.candidates;
+  std::vector<std::uint16_t>& score = L.score;
   // 3x3 non-maximum suppression on the score image (strict against earlier pixels, so that of
   // two equal neighbours exactly one survives).
-  for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = static_cast<std::uint16_t>(c.score);
-  for (Candidate& c : candidates_) {
-    const std::uint16_t* s = score_.data() + c.y * w + c.x;
+  for (const Candidate& c : candidates) score[static_cast<size_t>(c.y * w + c.x)] = static_cast<std::uint16_t>(c.score);
+  for (Candidate& c : candidates) {
+    const std::uint16_t* s = score.data() + c.y * w + c.x;
     const int v = *s;
     const bool is_max = v >= s[-w - 1] && v >= s[-w] && v >= s[-w + 1] && v >= s[-1] && v > s[1] && v > s[w - 1] &&
                         v > s[w] && v > s[w + 1];
     if (!is_max) c.score = 0;  // suppressed
   }
   // The score image clean again for the next level, before any candidate is dropped.
-  for (const Candidate& c : candidates_) score_[static_cast<size_t>(c.y * w + c.x)] = 0;
-  candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(), [](const Candidate& c) { return c.score == 0; }),
-                    candidates_.end());
+  for (const Candidate& c : candidates) score[static_cast<size_t>(c.y * w + c.x)] = 0;
+  candidates.erase(std::remove_if(candidates.begin(), candidates.end(), [](const Candidate& c) { return c.score == 0; }),
+                   candidates.end());
 }
 
-void GridOrbExtractor::select_level(int level, Features& out) {
-  const Level& L = levels_[static_cast<size_t>(level)];
+void GridOrbExtractor::select_level(Level& L) {
+  std::vector<Candidate>& candidates = L.candidates;
+  std::vector<Candidate>& chosen = L.chosen;
   const int w = L.image.cols, h = L.image.rows;
   const int cells_x = (w - 2 * kBorder + L.cell_px - 1) / L.cell_px;
   const int cells_y = (h - 2 * kBorder + L.cell_px - 1) / L.cell_px;
@@ -318,47 +329,50 @@ void GridOrbExtractor::select_level(int level, Features& out) {
     return better(a.strong, a.score, a.y, a.x, b.strong, b.score, b.y, b.x);
   };
   // The best corner of each cell first: keypoints spread over the image, not clumped on texture.
-  for (size_t i = 0; i < candidates_.size(); ++i) {
-    const Candidate& c = candidates_[i];
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const Candidate& c = candidates[i];
     int& best = cell_best_[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)];
-    if (best < 0 || cand_better(c, candidates_[static_cast<size_t>(best)])) best = static_cast<int>(i);
+    if (best < 0 || cand_better(c, candidates[static_cast<size_t>(best)])) best = static_cast<int>(i);
   }
-  chosen_.clear();
+  chosen.clear();
   for (const int best : cell_best_)
     if (best >= 0) {
-      chosen_.push_back(candidates_[static_cast<size_t>(best)]);
-      candidates_[static_cast<size_t>(best)].score = -1;  // taken
+      chosen.push_back(candidates[static_cast<size_t>(best)]);
+      candidates[static_cast<size_t>(best)].score = -1;  // taken
     }
   const auto budget = static_cast<size_t>(std::max(L.budget, 0));
-  if (chosen_.size() > budget) {
-    std::partial_sort(chosen_.begin(), chosen_.begin() + static_cast<std::ptrdiff_t>(budget), chosen_.end(), cand_better);
-    chosen_.resize(budget);
-  } else if (chosen_.size() < budget) {
+  if (chosen.size() > budget) {
+    std::partial_sort(chosen.begin(), chosen.begin() + static_cast<std::ptrdiff_t>(budget), chosen.end(), cand_better);
+    chosen.resize(budget);
+  } else if (chosen.size() < budget) {
     // Then the best of the rest.
-    const auto taken_last = std::remove_if(candidates_.begin(), candidates_.end(), [](const Candidate& c) { return c.score < 0; });
-    candidates_.erase(taken_last, candidates_.end());
-    const size_t more = std::min(budget - chosen_.size(), candidates_.size());
-    std::partial_sort(candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(more), candidates_.end(),
+    const auto taken_last = std::remove_if(candidates.begin(), candidates.end(), [](const Candidate& c) { return c.score < 0; });
+    candidates.erase(taken_last, candidates.end());
+    const size_t more = std::min(budget - chosen.size(), candidates.size());
+    std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(more), candidates.end(),
                       cand_better);
-    chosen_.insert(chosen_.end(), candidates_.begin(), candidates_.begin() + static_cast<std::ptrdiff_t>(more));
+    chosen.insert(chosen.end(), candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(more));
   }
-  std::sort(chosen_.begin(), chosen_.end(), [](const Candidate& a, const Candidate& b) {
+  std::sort(chosen.begin(), chosen.end(), [](const Candidate& a, const Candidate& b) {
     return a.y != b.y ? a.y < b.y : a.x < b.x;
   });
+}
+
+void GridOrbExtractor::describe_level(const Level& L, int octave, Features& out) const {
   const float size = static_cast<float>(31.0 * L.scale);
-  mark_cost_stage(CostStage::Detect);
-  for (const Candidate& c : chosen_) {
-    const size_t row = out.keypoints.size();
+  size_t row = static_cast<size_t>(L.first_keypoint);
+  for (const Candidate& c : L.chosen) {
     const float angle = orientation(L, c.x, c.y);
     cv::KeyPoint kp;
     kp.pt = {static_cast<float>((c.x + 0.5) * L.scale - 0.5), static_cast<float>((c.y + 0.5) * L.scale - 0.5)};
     kp.size = size;
     kp.angle = angle;
     kp.response = static_cast<float>(c.score);
-    kp.octave = level;
+    kp.octave = octave;
     kp.class_id = -1;
-    out.keypoints.push_back(kp);
+    out.keypoints[row] = kp;
     describe(L, c.x, c.y, angle, out.descriptor_storage.ptr<std::uint8_t>(static_cast<int>(row)));
+    ++row;
   }
 }
 
@@ -400,18 +414,35 @@ void GridOrbExtractor::detect(const cv::Mat& gray, const cv::Mat& mask, Features
     out.descriptor_storage.create(config_.max_features, kDescriptorBits / 8, CV_8UC1);
   mark_cost_stage(CostStage::Pyramid);
   build_pyramid(gray);
-  int carried = 0;  // budget a level could not use goes to the next
-  for (int l = 0; l < static_cast<int>(levels_.size()); ++l) {
+  // Every level's box sums and corners, each level a task of its own (they share nothing).
+  const int n_levels = static_cast<int>(levels_.size());
+  auto find_corners = [&](int l) {
     Level& L = levels_[static_cast<size_t>(l)];
+    mark_cost_stage(CostStage::Pyramid);
+    build_box_sums(L);
+    mark_cost_stage(CostStage::Corners);
+    detect_level(L, mask);
+  };
+  run_tasks(runner_, n_levels, find_corners);
+  // The keypoints of each level in turn: budget a level could not use goes to the next.
+  mark_cost_stage(CostStage::Corners);
+  int carried = 0, total = 0;
+  for (Level& L : levels_) {
     const int own = L.budget;
     L.budget += carried;
-    mark_cost_stage(CostStage::Corners);
-    detect_level(l, mask);
-    const size_t before = out.keypoints.size();
-    select_level(l, out);
-    carried = L.budget - static_cast<int>(out.keypoints.size() - before);
+    select_level(L);
+    carried = L.budget - static_cast<int>(L.chosen.size());
     L.budget = own;
+    L.first_keypoint = total;
+    total += static_cast<int>(L.chosen.size());
   }
+  out.keypoints.resize(static_cast<size_t>(total));  // within the capacity of earlier frames
+  auto describe_keypoints = [&](int l) {
+    mark_cost_stage(CostStage::Detect);
+    describe_level(levels_[static_cast<size_t>(l)], l, out);
+  };
+  run_tasks(runner_, n_levels, describe_keypoints);
+  mark_cost_stage(CostStage::Detect);
   out.descriptors = out.descriptor_storage.rowRange(0, static_cast<int>(out.keypoints.size()));
 }
 

@@ -13,6 +13,7 @@
 #include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/runtime/bounded_queue.hpp"
 #include "rgbd_odometry/runtime/frame_mailbox.hpp"
+#include "rgbd_odometry/runtime/worker_pool.hpp"
 #include "rgbd_odometry/sensor/usb_devices.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
@@ -45,7 +46,8 @@ void check_cpus_allowed(const std::vector<int>& cpus) {
                         std::to_string(std::thread::hardware_concurrency()) + " CPUs)");
 }
 
-// Pins the calling thread to the role's CPU (roles: 0 capture, 1 extraction, 2 estimation, 3 output).
+// Pins the calling thread to the role's CPU (roles: 0 capture, 1 extraction, 2 estimation, 3 output,
+// 4.. extraction helpers).
 void pin_thread(const std::vector<int>& cpus, int role) {
   if (cpus.empty()) return;
   cpu_set_t set;
@@ -60,7 +62,14 @@ class Run {
   Run(const Config& config, FrameFeed& feed, const RealtimePipeline::OutputFn& on_output,
       const RealtimePipeline::MessageFn& on_message, const std::function<void()>& on_tick)
       : on_tick_(on_tick), config_(config), cpus_(parse_cpu_list(config.runtime.cpu_affinity)), feed_(feed), on_output_(on_output),
-        on_message_(on_message), mailbox_(!feed.live()), extractor_(config), estimator_(config) {
+        on_message_(on_message),
+        mailbox_(!feed.live()),
+        pool_(config.runtime.extraction_threads > 1
+                  ? std::make_unique<WorkerPool>(config.runtime.extraction_threads - 1,
+                                                 [this](int worker) { pin_thread(cpus_, 4 + worker); })
+                  : nullptr),
+        extractor_(config, pool_.get()),
+        estimator_(config) {
     check_cpus_allowed(cpus_);
     // USB hot-plug tells when a sensor comes back sooner than the next re-open attempt would.
     if (feed.live()) usb_ = std::make_unique<UsbWatcher>();
@@ -282,6 +291,7 @@ class Run {
   const RealtimePipeline::MessageFn& on_message_;
   std::unique_ptr<UsbWatcher> usb_;
   FrameMailbox mailbox_;
+  std::unique_ptr<WorkerPool> pool_;  // the extraction's helpers (before extractor_: outlives it)
   FrameExtractor extractor_;  // the extraction thread's
   PairEstimator estimator_;   // the estimation thread's
   std::array<ProcessedSlot, kProcessedSlots> slots_;

@@ -97,6 +97,10 @@ struct RuntimeConfig {
   // 1: extraction and pair estimation in one thread; 2: extraction of frame k+1 overlaps
   // the matching/RANSAC/covariance of frame k.
   int processing_threads = 2;
+  // Threads that extract one frame (GRID_ORB's pyramid levels split between them: the same
+  // result on any number): the extraction thread and extraction_threads - 1 helpers started
+  // once. On the XU3 the big cluster (CPUs 4-7) has room for 3 next to capture/estimation.
+  int extraction_threads = 1;
   // CPUs to pin the threads to, "" for none. A comma list taken in the order capture,
   // extraction, estimation, output (wrapping round), e.g. "4,5,6,7" for the XU3's A15 cores.
   std::string cpu_affinity;

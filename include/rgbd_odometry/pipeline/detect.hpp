@@ -7,6 +7,7 @@
 
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/pipeline/features.hpp"
+#include "rgbd_odometry/pipeline/task_runner.hpp"
 
 namespace rgbdo {
 
@@ -14,7 +15,8 @@ class GridOrbExtractor;
 
 class FeatureDetector {
  public:
-  explicit FeatureDetector(const FeatureConfig& config);
+  // runner: where GRID_ORB may split its work (task_runner.hpp); null: all on the caller.
+  explicit FeatureDetector(const FeatureConfig& config, TaskRunner* runner = nullptr);
   ~FeatureDetector();
   FeatureDetector(FeatureDetector&&) noexcept;
   FeatureDetector& operator=(FeatureDetector&&) noexcept;
@@ -24,6 +26,7 @@ class FeatureDetector {
 
  private:
   FeatureConfig config_;
+  TaskRunner* runner_;
   std::unique_ptr<GridOrbExtractor> grid_orb_;  // GRID_ORB: sized at the first frame
   cv::Ptr<cv::Feature2D> detector_;
   cv::Ptr<cv::Feature2D> descriptor_;  // same object as detector_ when the names agree

@@ -24,7 +24,9 @@ struct ProcessedFrame {
 
 class FrameExtractor {
  public:
-  explicit FrameExtractor(const Config& config);  // config must have passed validate()
+  // config must have passed validate(); runner: where detection may split its work (null:
+  // all on the calling thread; the result is the same).
+  explicit FrameExtractor(const Config& config, TaskRunner* runner = nullptr);
 
   // Overwrites `out`, reusing its buffers. A failed frame keeps its status and problem.
   void extract(const RgbdFrame& frame, ProcessedFrame& out);

@@ -31,6 +31,7 @@
 
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/pipeline/features.hpp"
+#include "rgbd_odometry/pipeline/task_runner.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
 
 namespace rgbdo {
@@ -38,7 +39,9 @@ namespace rgbdo {
 class GridOrbExtractor {
  public:
   // Sizes every buffer for width x height frames and the configuration's levels and budget.
-  GridOrbExtractor(const FeatureConfig& config, int width, int height);
+  // With a runner, the levels' corners and descriptors are found in parallel tasks (the
+  // result is the same).
+  GridOrbExtractor(const FeatureConfig& config, int width, int height, TaskRunner* runner = nullptr);
 
   // Detects inside mask (CV_8UC1, 255 = allowed, gray's size) and describes; out is
   // overwritten, reusing its buffers.
@@ -60,6 +63,11 @@ class GridOrbExtractor {
   static const std::array<PointPair, kDescriptorBits>& pattern();
 
  private:
+  struct Candidate {
+    int x, y;       // level pixels
+    int score;      // FAST score at the threshold the cell used
+    bool strong;    // a corner at fast_threshold (not only at the low fallback)
+  };
   struct Level {
     cv::Mat image;                   // CV_8UC1
     // 5x5 box sums of the image, rows box_stride_ apart (one stride for every level, so one
@@ -74,17 +82,20 @@ class GridOrbExtractor {
     std::vector<std::uint16_t> wy;
     std::vector<simd::ResampleGroup> x_groups;
     std::vector<int> mask_x, mask_y;  // the level-0 column (row) of each level column (row): mask look-ups
-  };
-  struct Candidate {
-    int x, y;       // level pixels
-    int score;      // FAST score at the threshold the cell used
-    bool strong;    // a corner at fast_threshold (not only at the low fallback)
+    // The level's own detection state, so that levels can be detected in parallel.
+    std::vector<Candidate> candidates, chosen;
+    std::vector<std::uint16_t> score;  // per pixel; 0 = no corner (clean between frames)
+    std::vector<std::uint8_t> flags;   // one row of FAST flags
+    std::vector<int> cell_has;         // cells with a corner at the full threshold
+    int first_keypoint = 0;            // where its keypoints start in the frame's list
   };
 
   void build_pyramid(const cv::Mat& gray);
-  void detect_level(int level, const cv::Mat& mask);
-  void suppress_non_maxima(int level);
-  void select_level(int level, Features& out);
+  void build_box_sums(Level& level) const;
+  void detect_level(Level& level, const cv::Mat& mask) const;
+  void suppress_non_maxima(Level& level) const;
+  void select_level(Level& level);
+  void describe_level(const Level& level, int octave, Features& out) const;
   float orientation(const Level& level, int x, int y) const;
   void describe(const Level& level, int x, int y, float angle_deg, std::uint8_t* out) const;
 
@@ -98,13 +109,11 @@ class GridOrbExtractor {
   simd::Box5RowFn box5_row_;
   simd::DiscMomentsFn disc_moments_;
   int box_stride_;
-  std::vector<std::uint16_t> score_;  // per pixel of the level being detected; 0 = no corner
-  std::vector<std::uint8_t> row_buffer_;  // one level-0 row (+16 readable bytes): FAST flags, or a blended pyramid row
-  std::vector<Candidate> candidates_, chosen_;
-  std::vector<int> cell_best_;
+  TaskRunner* runner_;
+  std::vector<std::uint8_t> row_buffer_;  // one level-0 row (+16 readable bytes): a blended pyramid row
+  std::vector<int> cell_best_;            // selection (one level at a time)
   // Per orientation step and comparison, the offsets of its two boxes in a box image.
   std::array<std::array<std::array<std::int32_t, 2>, kDescriptorBits>, kAngleSteps> steered_offsets_;
-  std::array<int, 16> circle_offset_{};  // FAST circle (radius 3), set per level stride
 };
 
 }  // namespace rgbdo
