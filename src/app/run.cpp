@@ -180,6 +180,11 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
         << " reconnects\n";
     out << "  link status: " << flight->status_line() << "\n";
   }
+  if (!run.failure.empty()) {
+    // The log and the summary above hold everything finished before the failure.
+    err << "rgbd-odometry: stopped by a failure in the " << run.failure << "\n";
+    return 1;
+  }
   return 0;
 }
 

@@ -21,8 +21,13 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.features.keypoints.clear();
   out.geometry.clear();
   if (frame.status != Status::Ok) return;
-  if (frame.gray.empty() || frame.depth_m.empty() || frame.gray.size() != frame.depth_m.size()) {
+  if (frame.gray.empty() || frame.depth_m.empty() || frame.gray.size() != frame.depth_m.size() ||
+      frame.gray.type() != CV_8UC1 || frame.depth_m.type() != CV_32FC1) {
     out.status = Status::BadFrame;
+    out.problem = "a frame the pipeline cannot take: intensity " + cv::typeToString(frame.gray.type()) + " " +
+                  std::to_string(frame.gray.cols) + "x" + std::to_string(frame.gray.rows) + ", depth " +
+                  cv::typeToString(frame.depth_m.type()) + " " + std::to_string(frame.depth_m.cols) + "x" +
+                  std::to_string(frame.depth_m.rows) + " (needs 8UC1 and 32FC1 of one size)";
     return;
   }
   const CostStagesEnd stages_end;

@@ -78,14 +78,17 @@ class Run {
 
   RealtimeStats go(const std::atomic<bool>& stop) {
     std::vector<std::thread> threads;
-    threads.emplace_back([this] { capture(); });
+    threads.emplace_back([this] { guarded(Role::Capture, [this] { capture(); }); });
     if (config_.runtime.processing_threads == 2) {
-      threads.emplace_back([this] { extraction(); });
-      threads.emplace_back([this] { estimation(); });
+      threads.emplace_back([this] { guarded(Role::Extraction, [this] { extraction(); }); });
+      threads.emplace_back([this] { guarded(Role::Estimation, [this] { estimation(); }); });
     } else {
-      threads.emplace_back([this] { extract_and_estimate(); });
+      threads.emplace_back([this] { guarded(Role::Processing, [this] { extract_and_estimate(); }); });
     }
-    threads.emplace_back([this] { output(); });
+    threads.emplace_back([this] {
+      guarded(Role::Output, [this] { output(); });
+      output_done_ = true;
+    });
     bool stopping = false;
     while (!output_done_) {
       if (stop && !stopping) {
@@ -97,12 +100,44 @@ class Run {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     for (auto& t : threads) t.join();
+    stats_.failure = failure_;
     stats_.skipped = mailbox_.skipped() + static_cast<std::uint64_t>(feed_.replaced_frames());
     stats_.dropped_by_sensor = feed_.dropped_frames();
     return stats_;
   }
 
  private:
+  // Runs a thread's body. An exception (a corrupt frame deep in OpenCV, a bug) must not take
+  // the process down in flight: it is noted with the thread's name and the run stops as at a
+  // stop request. The failed thread's own queues are closed, so that the threads upstream
+  // stop and the ones downstream finish and output what they already hold; run() then
+  // reports it (RealtimeStats::failure).
+  enum class Role { Capture, Extraction, Estimation, Processing, Output };
+  template <class Body>
+  void guarded(Role role, Body body) {
+    try {
+      body();
+    } catch (const std::exception& e) {
+      fail(role, e.what());
+    } catch (...) {
+      fail(role, "an exception of unknown type");
+    }
+  }
+  void fail(Role role, const std::string& what) {
+    static constexpr const char* kNames[] = {"capture thread", "extraction thread", "estimation thread",
+                                             "processing thread", "output thread"};
+    {
+      std::lock_guard<std::mutex> lock(messages_mutex_);
+      if (failure_.empty()) failure_ = std::string(kNames[static_cast<int>(role)]) + ": " + what;
+    }
+    stopping_ = true;
+    feed_.interrupt();
+    mailbox_.close();  // capture stops; a frame in hand is still taken
+    if (role == Role::Extraction || role == Role::Estimation || role == Role::Output) ready_.close();
+    if (role == Role::Estimation || role == Role::Output) free_.close();
+    if (role == Role::Estimation || role == Role::Processing || role == Role::Output) outputs_.close();
+  }
+
   // --- capture thread -------------------------------------------------------------------
   void capture() {
     pin_thread(cpus_, 0);
@@ -265,7 +300,6 @@ class Run {
       }
     }
     flush_messages();
-    output_done_ = true;
   }
 
   // Messages are raised on the capture thread but printed on the output thread, so that each
@@ -301,6 +335,7 @@ class Run {
   std::atomic<bool> stopping_{false}, output_done_{false};
   std::mutex messages_mutex_;
   std::vector<std::string> messages_;
+  std::string failure_;  // the first thread failure (under messages_mutex_)
   RealtimeStats stats_;  // each field has one writing thread; read after the joins
 };
 

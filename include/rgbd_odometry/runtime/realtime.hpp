@@ -41,6 +41,9 @@ struct RealtimeStats {
   int sensor_losses = 0, reopens = 0;
   int dropped_by_sensor = 0;   // from the sensor's frame indices
   LatencyHistogram latency;    // of pairs
+  // Empty unless a thread failed (an exception): "<thread> thread: <what>". The run then
+  // stopped as at a stop request; what was finished before was output.
+  std::string failure;
 };
 
 class RealtimePipeline {
