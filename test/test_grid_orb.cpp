@@ -215,5 +215,26 @@ TEST(GridOrb, SelectedByNameThroughTheFeatureDetector) {
   EXPECT_EQ(out.descriptors.type(), CV_8UC1);
 }
 
+TEST(FeatureDetector, EveryDetectorKeepsToMaxFeatures) {
+  // OpenCV's FAST finds ~2,700 corners on a textured frame and knows no cap: the strongest
+  // max_features are kept (matching's cost is bounded by the configuration), descriptors
+  // for exactly those.
+  const Frame f = bundled_frame(0);
+  for (const auto& [detector, descriptor] : {std::pair{"FAST", "ORB"}, std::pair{"AGAST", "BRISK"}, std::pair{"AKAZE", "AKAZE"}}) {
+    FeatureConfig config = grid_orb_config();
+    config.detector = detector;
+    config.descriptor = descriptor;
+    config.max_features = 300;
+    FeatureDetector d(config);
+    Features out;
+    d.detect(f.gray, f.mask, out);
+    // A textured frame has far more; the descriptor may then drop a few near the border
+    // (ORB's does: 289 of FAST's 300 kept on this frame).
+    EXPECT_LE(out.keypoints.size(), 300u) << detector;
+    EXPECT_GE(out.keypoints.size(), 280u) << detector;
+    EXPECT_EQ(out.descriptors.rows, static_cast<int>(out.keypoints.size())) << detector;
+  }
+}
+
 }  // namespace
 }  // namespace rgbdo

@@ -17,6 +17,8 @@ struct Param {
   std::variant<int*, double*, bool*, std::string*, std::uint64_t*> target;
   double min = -std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
+  // Where zero is singular (a variance, a weight), min itself is refused: (min, max].
+  bool above_min = false;
 };
 
 std::vector<Param> param_table(Config& c) {
@@ -54,7 +56,7 @@ std::vector<Param> param_table(Config& c) {
       {"ransac.adaptive_stop", &c.ransac.adaptive_stop},
       {"covariance.perturbations", &c.covariance.perturbations, 8, 100000},
       {"covariance.depth_noise_coeff", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
-      {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100},
+      {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
       {"covariance.residual_variance_factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},
       {"sensor.fps", &c.sensor.fps, 1, 120},
@@ -78,7 +80,7 @@ std::vector<Param> param_table(Config& c) {
       {"link.odometry", &c.link.odometry},
       {"link.vision_position_delta", &c.link.vision_position_delta},
       {"link.quality_sigma_fail_m", &c.link.quality_sigma_fail_m, 1e-4, 10},
-      {"link.velocity_error_min_mps", &c.link.velocity_error_min_mps, 0.0, 100},
+      {"link.velocity_error_min_mps", &c.link.velocity_error_min_mps, 0.0, 100, true},  // 0: an exact velocity to the EKF
       {"link.velocity_error_max_mps", &c.link.velocity_error_max_mps, 0.0, 100},
       {"link.autopilot_system_id", &c.link.autopilot_system_id, 0, 255},
       {"link.autopilot_timeout_s", &c.link.autopilot_timeout_s, 0.2, 60},
@@ -104,6 +106,12 @@ double parse_number(const std::string& key, const std::string& text) {
 }
 
 void check_range(const Param& p, double value) {
+  if (p.above_min && !(value > p.min && value <= p.max)) {
+    std::ostringstream msg;
+    msg << "config key '" << p.key << "': value " << value << " is outside (" << p.min << ", " << p.max
+        << "]: it must be above " << p.min << " (at " << p.min << " the estimate is singular)";
+    throw ConfigError(msg.str());
+  }
   if (!(value >= p.min && value <= p.max)) {
     std::ostringstream msg;
     msg << "config key '" << p.key << "': value " << value << " is outside [" << p.min << ", "

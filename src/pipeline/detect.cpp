@@ -1,5 +1,6 @@
 #include "rgbd_odometry/pipeline/detect.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "rgbd_odometry/pipeline/grid_orb.hpp"
@@ -43,12 +44,19 @@ void FeatureDetector::detect(const cv::Mat& gray, const cv::Mat& mask, Features&
     return;
   }
   out.keypoints.clear();
-  if (detector_ == descriptor_) {
-    detector_->detectAndCompute(gray, mask, out.keypoints, out.descriptors);
-  } else {
-    detector_->detect(gray, out.keypoints, mask);
-    descriptor_->compute(gray, out.keypoints, out.descriptors);
+  if (config_.detector == "ORB" && detector_ == descriptor_) {
+    detector_->detectAndCompute(gray, mask, out.keypoints, out.descriptors);  // ORB keeps its own cap
+    return;
   }
+  // Every other detector finds as many as it likes (FAST: ~2,700 on a textured frame): the
+  // strongest max_features are kept, so that matching's cost has the configured bound.
+  detector_->detect(gray, out.keypoints, mask);
+  const auto cap = static_cast<size_t>(config_.max_features);
+  if (out.keypoints.size() > cap) {
+    cv::KeyPointsFilter::retainBest(out.keypoints, config_.max_features);
+    out.keypoints.resize(std::min(out.keypoints.size(), cap));  // retainBest keeps ties at the cut
+  }
+  descriptor_->compute(gray, out.keypoints, out.descriptors);
 }
 
 }  // namespace rgbdo
