@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 #include "rgbd_odometry/io/odometry_log.hpp"
 
@@ -65,6 +68,86 @@ TEST(OdometryCsv, UnwritablePathIsNamed) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/odometry.csv"), std::string::npos);
   }
+}
+
+namespace fs = std::filesystem;
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct Scratch {
+  fs::path dir = fs::temp_directory_path() / ("rgbdo-logs-" + std::to_string(::getpid()));
+  Scratch() {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  ~Scratch() { fs::remove_all(dir); }
+  std::string file(const char* name) const { return (dir / name).string(); }
+};
+
+PairResult failed_pair(std::int64_t t) {
+  PairResult r;
+  r.t_prev_ns = t;
+  r.t_curr_ns = t + 33'000'000;
+  r.status = Status::TooFewMatches;
+  return r;
+}
+
+TEST(LogFiles, ARunKeepsTheEarlierRunsLogsNewestFirst) {
+  const Scratch s;
+  const std::string log = s.file("odometry.csv");
+  std::vector<std::string> runs;
+  for (int run = 0; run < 3; ++run) {
+    OdometryCsvWriter w(log);
+    for (int i = 0; i <= run; ++i) w.write(failed_pair(1'000'000'000LL * (run * 10 + i)));
+    runs.push_back(read_all(log));
+  }
+  EXPECT_EQ(read_all(log), runs[2]);
+  EXPECT_EQ(read_all(log + ".1"), runs[1]);
+  EXPECT_EQ(read_all(log + ".2"), runs[0]);
+  EXPECT_FALSE(fs::exists(log + ".3"));
+  for (const auto& r : runs) EXPECT_EQ(r.rfind(OdometryCsvWriter::header() + "\n", 0), 0u);  // each opens with the header
+}
+
+TEST(LogFiles, TheLogsTogetherStayWithinTheBoundOldestRemovedFirst) {
+  const Scratch s;
+  const std::string path = s.file("trace.txt");
+  const std::uint64_t bound = 10'000;
+  std::string last;
+  for (int run = 0; run < 3; ++run) {
+    RotatingFile f(path, bound, "header");
+    for (int i = 0; i < 400; ++i) {
+      last = "run " + std::to_string(run) + " line " + std::to_string(i) + std::string(30, '.');
+      f.write_line(last);
+      std::uint64_t total = fs::file_size(path);
+      for (int k = 1; fs::exists(path + "." + std::to_string(k)); ++k) total += fs::file_size(path + "." + std::to_string(k));
+      ASSERT_LE(total, bound) << "run " << run << " line " << i;
+    }
+  }
+  // The newest line is in FILE; every kept part opens with the header and holds whole lines
+  // of the latest run (19,000 bytes written by it alone: the earlier runs are gone).
+  const std::string newest = read_all(path);
+  EXPECT_NE(newest.find(last + "\n"), std::string::npos);
+  EXPECT_EQ(newest.rfind(last + "\n"), newest.size() - last.size() - 1);
+  int kept = 0;
+  for (int k = 1; fs::exists(path + "." + std::to_string(k)); ++k, ++kept) {
+    const std::string part = read_all(path + "." + std::to_string(k));
+    EXPECT_EQ(part.rfind("header\n", 0), 0u);
+    EXPECT_EQ(part.back(), '\n');
+    EXPECT_EQ(part.find("run 0"), std::string::npos);
+  }
+  EXPECT_GE(kept, 2);
+}
+
+TEST(LogFiles, ADeviceIsWrittenAsItIsNeverMoved) {
+  RotatingFile f("/dev/null", 100, "header");
+  for (int i = 0; i < 100; ++i) f.write_line("a line of text");
+  EXPECT_TRUE(fs::exists("/dev/null"));
+  EXPECT_FALSE(fs::exists("/dev/null.1"));
 }
 
 }  // namespace

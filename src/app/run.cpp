@@ -68,8 +68,10 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   std::unique_ptr<OdometryCsvWriter> log;
   std::unique_ptr<TrajectoryWriter> trajectory;
   try {
-    if (!options.log_path.empty()) log = std::make_unique<OdometryCsvWriter>(options.log_path);
-    if (!options.trajectory_path.empty()) trajectory = std::make_unique<TrajectoryWriter>(options.trajectory_path);
+    // The log and the trajectory share the bound (each half of it).
+    const auto bound = static_cast<std::uint64_t>(config.log.max_total_mb * 1e6 / 2);
+    if (!options.log_path.empty()) log = std::make_unique<OdometryCsvWriter>(options.log_path, bound);
+    if (!options.trajectory_path.empty()) trajectory = std::make_unique<TrajectoryWriter>(options.trajectory_path, bound);
   } catch (const std::exception& e) {
     err << "rgbd-odometry: " << e.what() << "\n";
     return 1;

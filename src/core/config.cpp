@@ -68,6 +68,7 @@ std::vector<Param> param_table(Config& c) {
       {"sensor.record_oni", &c.sensor.record_oni},
       {"runtime.processing_threads", &c.runtime.processing_threads, 1, 2},
       {"runtime.extraction_threads", &c.runtime.extraction_threads, 1, 8},
+      {"log.max_total_mb", &c.log.max_total_mb, 0.01, 1e7},
       {"runtime.cpu_affinity", &c.runtime.cpu_affinity},
       {"body.camera_roll_deg", &c.body.camera_roll_deg, -180, 180},
       {"body.camera_pitch_deg", &c.body.camera_pitch_deg, -90, 90},

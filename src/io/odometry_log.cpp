@@ -5,24 +5,8 @@
 #include "rgbd_odometry/core/time_format.hpp"
 
 namespace rgbdo {
-namespace {
-
-std::ofstream open_or_throw(const std::string& path) {
-  std::ofstream out(path, std::ios::out | std::ios::trunc);
-  if (!out) throw std::runtime_error("cannot create output file '" + path + "'");
-  return out;
-}
-
-void check(const std::ofstream& out, const std::string& path) {
-  if (!out) throw std::runtime_error("cannot write to '" + path + "' (disk full or file removed?)");
-}
-
-}  // namespace
-
-OdometryCsvWriter::OdometryCsvWriter(const std::string& path) : path_(path), out_(open_or_throw(path)) {
-  out_ << header() << '\n' << std::flush;
-  check(out_, path_);
-}
+OdometryCsvWriter::OdometryCsvWriter(const std::string& path, std::uint64_t max_total_bytes)
+    : file_(path, max_total_bytes, header()) {}
 
 std::string OdometryCsvWriter::header() {
   std::string h = "t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw";
@@ -54,23 +38,18 @@ std::string OdometryCsvWriter::row(const PairResult& r) {
   return s;
 }
 
-void OdometryCsvWriter::write(const PairResult& r) {
-  out_ << row(r) << '\n' << std::flush;
-  check(out_, path_);
-}
+void OdometryCsvWriter::write(const PairResult& r) { file_.write_line(row(r)); }
 
-TrajectoryWriter::TrajectoryWriter(const std::string& path) : path_(path), out_(open_or_throw(path)) {
-  out_ << "# timestamp tx ty tz qx qy qz qw (rgbd-odometry integrated trajectory)\n";
-}
+TrajectoryWriter::TrajectoryWriter(const std::string& path, std::uint64_t max_total_bytes)
+    : file_(path, max_total_bytes, "# timestamp tx ty tz qx qy qz qw (rgbd-odometry integrated trajectory)") {}
 
 void TrajectoryWriter::write(std::int64_t t_ns, const Eigen::Isometry3d& pose) {
   Eigen::Quaterniond q(pose.linear());
   q.normalize();
   char buf[160];
-  std::snprintf(buf, sizeof buf, " %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", pose.translation().x(),
+  std::snprintf(buf, sizeof buf, " %.9f %.9f %.9f %.9f %.9f %.9f %.9f", pose.translation().x(),
                 pose.translation().y(), pose.translation().z(), q.x(), q.y(), q.z(), q.w());
-  out_ << format_seconds(t_ns) << buf << std::flush;
-  check(out_, path_);
+  file_.write_line(format_seconds(t_ns) + buf);
 }
 
 }  // namespace rgbdo

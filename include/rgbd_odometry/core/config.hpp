@@ -93,6 +93,12 @@ struct SensorConfig {
 };
 
 // The real-time pipeline's threads.
+struct LogConfig {
+  // The odometry log and trajectory files of this and earlier runs together (FILE, FILE.1,
+  // ...: io/rotating_file.hpp), in MB; the oldest runs' files go first. ~100 MB an hour at 30 Hz.
+  double max_total_mb = 1024;
+};
+
 struct RuntimeConfig {
   // 1: extraction and pair estimation in one thread; 2: extraction of frame k+1 overlaps
   // the matching/RANSAC/covariance of frame k.
@@ -145,6 +151,7 @@ struct Config {
   CovarianceConfig covariance;
   SensorConfig sensor;
   RuntimeConfig runtime;
+  LogConfig log;
   BodyConfig body;
   LinkConfig link;
   std::uint64_t seed = 1;  // with the frame-pair index, seeds RANSAC and the perturbations
