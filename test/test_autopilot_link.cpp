@@ -33,6 +33,7 @@
 #include <sstream>
 #include <thread>
 
+#include "node_checker.hpp"
 #include "rgbd_odometry/app/run.hpp"
 
 namespace rgbdo {
@@ -45,27 +46,8 @@ const std::string kCheckDir = RGBDO_MAVLINK_CHECK_DIR;
 constexpr double kRate = 1.0;
 constexpr long long kTrueOffsetNs = 1'234'567'000'000LL;  // the simulator's clock minus ours
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rgbdo_autopilot_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch(const std::string& name) { return scratch_dir("rgbdo_autopilot", name); }
 
-pid_t start_node(const std::string& script, const std::vector<std::string>& args, int inherit_fd) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (inherit_fd >= 0) ::dup2(inherit_fd, 3);
-    std::vector<std::string> all{"node", kCheckDir + "/" + script};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::execvp("node", argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
 
 bool wait_for_file(const fs::path& file, int seconds) {
   for (int i = 0; i < seconds * 20 && !fs::exists(file); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -193,7 +175,7 @@ void converge_over(const std::string& name, const std::function<std::string(cons
                                         "--expect-converged", "--loss", "0.05", "--reorder", "0.03", "--garbage", "0.3",
                                         "--seed", "7", "--idle-exit-ms", "3000", "--max-ms", "400000"};
   args.insert(args.end(), common.begin(), common.end());
-  const pid_t sim = start_node("autopilot_sim.mjs", args, inherit_fd);
+  const pid_t sim = start_node(kCheckDir, "autopilot_sim.mjs", args, inherit_fd);
   after_start();
   ASSERT_TRUE(wait_for_file(dir / "ready", 30)) << "simulator not ready";
   const std::string link = link_for(dir);
@@ -292,7 +274,7 @@ TEST(FlightLinkAutopilot, ALatePeerIsFoundAndAVanishedAutopilotIsReported) {
   // The simulator speaks after 3 s, goes quiet after 20 used answers for as long as the
   // program sends 4 heartbeats (>= 3 s of silence, the timeout is 1.5 s), speaks again and
   // leaves after 3 more.
-  const pid_t sim = start_node("autopilot_sim.mjs",
+  const pid_t sim = start_node(kCheckDir, "autopilot_sim.mjs",
                                {"--udp-send", "127.0.0.1:" + std::to_string(port), "--start-after-ms", "3000",
                                 "--ready-file", (dir / "ready").string(), "--result", (dir / "result.json").string(),
                                 "--capture", (dir / "capture.bin").string(), "--silent-after-answers", "20",

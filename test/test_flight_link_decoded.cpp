@@ -18,6 +18,7 @@
 #include <sstream>
 #include <thread>
 
+#include "node_checker.hpp"
 #include "rgbd_odometry/app/run.hpp"
 
 namespace rgbdo {
@@ -27,27 +28,11 @@ namespace fs = std::filesystem;
 const std::string kCheckDir = RGBDO_MAVLINK_CHECK_DIR;
 constexpr int kPairs = 39;  // the 40 bundled frames
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rgbdo_link_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch(const std::string& name) { return scratch_dir("rgbdo_link", name); }
 
 // Starts the decoder; `inherit_fd` (if >= 0) becomes its fd 3. Returns the child's pid.
 pid_t start_decoder(const std::vector<std::string>& args, int inherit_fd) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (inherit_fd >= 0) ::dup2(inherit_fd, 3);
-    std::vector<std::string> all{"node", kCheckDir + "/decode.mjs"};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::execvp("node", argv.data());
-    ::_exit(127);
-  }
-  return pid;
+  return start_node(kCheckDir, "decode.mjs", args, inherit_fd);
 }
 
 std::string wait_for_ready(const fs::path& ready_file) {
