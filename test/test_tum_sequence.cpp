@@ -115,5 +115,27 @@ TEST_F(BrokenSequence, CorruptWrongSizeAndMissingDepthAreFlaggedNotThrown) {
   EXPECT_EQ(load_tum_frame(seq.frames[3], 5000, 640, 480).status, Status::NoDepth);
 }
 
+TEST_F(BrokenSequence, AHugeFrameIsRefusedFromItsHeaderBeforeDecoding) {
+  // A PNG declaring 20000 x 20000 (its decoding would take 1.2 GB): signature and IHDR only,
+  // so the size in the message can only have come from the header.
+  fs::create_directories(dir / "rgb");
+  fs::create_directories(dir / "depth");
+  const unsigned char header[33] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
+                                    0, 0, 0x4E, 0x20, 0, 0, 0x4E, 0x20, 8, 2, 0, 0, 0, 0, 0, 0, 0};
+  std::ofstream(dir / "rgb/huge.png", std::ios::binary).write(reinterpret_cast<const char*>(header), sizeof header);
+  std::ofstream(dir / "depth/huge.png", std::ios::binary).write(reinterpret_cast<const char*>(header), sizeof header);
+  cv::imwrite((dir / "rgb/ok.png").string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar(1, 2, 3)));
+  write("rgb.txt", "1.00 rgb/huge.png\n1.10 rgb/ok.png\n");
+  write("depth.txt", "1.00 depth/huge.png\n1.10 depth/huge.png\n");
+  const TumSequence seq = open_tum_sequence(dir.string());
+  const auto colour = load_tum_frame(seq.frames[0], 5000, 640, 480);
+  EXPECT_EQ(colour.status, Status::BadFrame);
+  EXPECT_NE(colour.problem.find("20000x20000 (its PNG header; not decoded)"), std::string::npos) << colour.problem;
+  const auto depth = load_tum_frame(seq.frames[1], 5000, 640, 480);
+  EXPECT_EQ(depth.status, Status::BadFrame);
+  EXPECT_NE(depth.problem.find("depth image"), std::string::npos) << depth.problem;
+  EXPECT_NE(depth.problem.find("20000x20000"), std::string::npos) << depth.problem;
+}
+
 }  // namespace
 }  // namespace rgbdo

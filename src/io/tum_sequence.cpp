@@ -7,6 +7,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <cstdint>
+#include <utility>
+#include <optional>
+#include <cstring>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include "rgbd_odometry/core/time_format.hpp"
@@ -26,6 +30,7 @@ std::optional<std::int64_t> parse_timestamp_ns(const std::string& text) {
 }
 
 namespace {
+
 
 struct IndexEntry {
   std::int64_t t_ns;
@@ -138,6 +143,18 @@ TumSequence open_tum_sequence(const std::string& directory, std::int64_t max_off
   return seq;
 }
 
+std::optional<std::pair<std::uint32_t, std::uint32_t>> png_declared_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char h[24] = {};
+  if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return std::nullopt;
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (std::memcmp(h, kSignature, 8) != 0 || std::memcmp(h + 12, "IHDR", 4) != 0) return std::nullopt;
+  const auto be32 = [&](int at) {
+    return (std::uint32_t{h[at]} << 24) | (std::uint32_t{h[at + 1]} << 16) | (std::uint32_t{h[at + 2]} << 8) | h[at + 3];
+  };
+  return std::pair{be32(16), be32(20)};
+}
+
 RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int expected_width,
                          int expected_height) {
   const CostStagesEnd stages_end;
@@ -154,6 +171,14 @@ RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int e
   };
   // Decoded in colour and converted as frames from a live RGB sensor are (libpng's own grey
   // conversion differs in many pixels): replay and live agree.
+  const auto declared_size_problem = [&](const std::string& path, const char* what) -> std::string {
+    const auto size = png_declared_size(path);
+    if (!size || (size->first == static_cast<std::uint32_t>(expected_width) && size->second == static_cast<std::uint32_t>(expected_height)))
+      return {};
+    return std::string(what) + " image '" + path + "' is " + std::to_string(size->first) + "x" + std::to_string(size->second) +
+           " (its PNG header; not decoded), the camera is " + std::to_string(expected_width) + "x" + std::to_string(expected_height);
+  };
+  if (std::string why = declared_size_problem(ref.colour_path, "colour"); !why.empty()) return fail(Status::BadFrame, why);
   cv::Mat colour;
   try {
     const cv::Mat bgr = cv::imread(ref.colour_path, cv::IMREAD_COLOR);
@@ -173,6 +198,7 @@ RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int e
   f.gray = colour;
   if (!ref.t_depth_ns) return fail(Status::NoDepth, "no depth image within 20 ms of colour frame " + format_seconds(ref.t_colour_ns));
 
+  if (std::string why = declared_size_problem(ref.depth_path, "depth"); !why.empty()) return fail(Status::BadFrame, why);
   cv::Mat raw;
   try {
     raw = cv::imread(ref.depth_path, cv::IMREAD_ANYDEPTH);

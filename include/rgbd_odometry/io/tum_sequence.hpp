@@ -4,6 +4,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -66,6 +67,11 @@ TumSequence open_tum_sequence(const std::string& directory, std::int64_t max_off
 
 // Decodes one frame. Never throws: an unreadable or wrongly sized image gives
 // status BadFrame, a missing depth association NoDepth.
+// The size (width, height) a PNG file declares in its IHDR chunk, read before any decoding:
+// a recording's 20000 x 20000 frame is refused from its header, not after 2.4 GB of
+// decoding. Empty for a file that is not a PNG (OpenCV's decoders judge those).
+std::optional<std::pair<std::uint32_t, std::uint32_t>> png_declared_size(const std::string& path);
+
 RgbdFrame load_tum_frame(const TumFrameRef& ref, double depth_units_per_m, int expected_width,
                          int expected_height);
 

@@ -338,6 +338,10 @@ class VirtualDevice : public oni::driver::DeviceBase {
       if (resumed && due_s < std::chrono::duration<double>(opened - start).count()) continue;
       while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
       if (e.colour && options_.drop.count(index)) continue;
+      // A frame of another size is dropped (the reader sees the gap in the indices), a huge
+      // one from its PNG header, before it is decoded.
+      const auto declared = rgbdo::png_declared_size(e.path);
+      if (declared && (declared->first != std::uint32_t{kWidth} || declared->second != std::uint32_t{kHeight})) continue;
       cv::Mat image = cv::imread(e.path, e.colour ? cv::IMREAD_COLOR : cv::IMREAD_ANYDEPTH);
       if (image.empty() || image.cols != kWidth || image.rows != kHeight) continue;
       if (e.colour) {
