@@ -130,7 +130,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (solved != Status::Ok) return fail(solved);
 
   Rng covariance_rng(mix(config_.seed, 2 * pair_index + 1));
-  auto t0 = Clock::now();
+  Clock::time_point t0;  // each stage below reads the clock at its start
   if (compensate) {
     // Second pass: carry the depths to colour time with this pair's own velocity, which is
     // better than the previous pair's whenever the depth frames are far enough apart.
