@@ -50,6 +50,12 @@ int main(int argc, char** argv) {
                  "send MAVLink 2 odometry to the flight computer: udp://HOST:PORT or serial:///dev/ttyX[:BAUD] "
                  "(overrides link.uri)");
   app.add_option("--trajectory", options.trajectory_path, "write the integrated trajectory (TUM format) here");
+  app.add_option("--groundtruth-allowance", options.groundtruth_allowance,
+                 "noise of the ground truth allowed for in the covariance checks: auto (estimated from the "
+                 "ground-truth file), none, or T_M,R_RAD per axis (e.g. 0.0003,0.0015)")
+      ->capture_default_str();
+  app.add_option("--evaluation", options.evaluation_path,
+                 "write the per-pair evaluation against ground truth (errors, sigmas, NEES) as CSV here, for plots");
   app.add_option("--max-frames", options.max_frames, "stop after this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_flag("--start-at-groundtruth", options.start_at_groundtruth,
                "start the trajectory at the first frame's ground-truth pose");

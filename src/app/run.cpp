@@ -100,7 +100,14 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   }
 
   TrajectoryIntegrator integrator(origin);
-  AccuracyEvaluator evaluator(groundtruth, config.covariance.scale);
+  GroundTruthAllowance allowance;
+  try {
+    allowance = parse_allowance(options.groundtruth_allowance, groundtruth);
+  } catch (const std::invalid_argument& e) {
+    err << "rgbd-odometry: --groundtruth-allowance: " << e.what() << "\n";
+    return 2;
+  }
+  AccuracyEvaluator evaluator(groundtruth, allowance);
   StageTimes total;
   int timed_pairs = 0;
   int rematched_pairs = 0;
@@ -173,6 +180,14 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   if (!output_error.empty()) {
     err << "rgbd-odometry: " << output_error << "\n";
     return 1;
+  }
+  if (!options.evaluation_path.empty() && evaluator.has_groundtruth()) {
+    try {
+      evaluator.write_csv(options.evaluation_path);
+    } catch (const std::exception& e) {
+      err << "rgbd-odometry: " << e.what() << "\n";
+      return 1;
+    }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, rematched_pairs, run);
   if (flight) {

@@ -34,4 +34,37 @@ double rotation_angle(const Eigen::Matrix3d& R) {
   return Eigen::AngleAxisd(R).angle();
 }
 
+Matrix6d se3_adjoint(const Eigen::Isometry3d& T) {
+  Matrix6d ad = Matrix6d::Zero();
+  const Eigen::Matrix3d R = T.linear();
+  ad.topLeftCorner<3, 3>() = R;
+  ad.topRightCorner<3, 3>() = skew(T.translation()) * R;
+  ad.bottomRightCorner<3, 3>() = R;
+  return ad;
+}
+
+Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  const Eigen::Matrix3d K = skew(r);
+  // Below ~1e-4 rad the closed form loses digits to cancellation; its series is exact there
+  // to double precision after three terms.
+  if (angle < 1e-4) return Eigen::Matrix3d::Identity() - 0.5 * K + (1.0 / 6.0) * K * K;
+  const double a2 = angle * angle;
+  return Eigen::Matrix3d::Identity() - (1 - std::cos(angle)) / a2 * K + (angle - std::sin(angle)) / (a2 * angle) * K * K;
+}
+
+Matrix6d right_perturbation_covariance(const Eigen::Isometry3d& T, const Matrix6d& xi_covariance) {
+  Matrix6d J = Matrix6d::Zero();
+  J.topLeftCorner<3, 3>() = T.linear().transpose();
+  J.bottomRightCorner<3, 3>() = so3_right_jacobian(rotation_vector(T.linear()));
+  return J * xi_covariance * J.transpose();
+}
+
+Vector6d right_perturbation_between(const Eigen::Isometry3d& reference, const Eigen::Isometry3d& estimate) {
+  Vector6d d;
+  d.head<3>() = reference.linear().transpose() * (estimate.translation() - reference.translation());
+  d.tail<3>() = rotation_vector(reference.linear().transpose() * estimate.linear());
+  return d;
+}
+
 }  // namespace rgbdo

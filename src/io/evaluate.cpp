@@ -2,13 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iomanip>
 #include <numeric>
+#include <stdexcept>
 
 namespace rgbdo {
 namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kChi2_6_95 = 12.5916;
-constexpr std::int64_t kDriftWindowNs = 1'000'000'000;
+constexpr std::int64_t kWindowNs = 1'000'000'000;
+
+double nees_of(const Vector6d& e, const Matrix6d& c) { return e.dot(c.ldlt().solve(e)); }
 }  // namespace
 
 ErrorStats error_stats(std::vector<double> v) {
@@ -25,14 +30,37 @@ ErrorStats error_stats(std::vector<double> v) {
   return s;
 }
 
-AccuracyEvaluator::AccuracyEvaluator(const GroundTruth& groundtruth, double covariance_scale_used)
-    : groundtruth_(groundtruth), scale_used_(covariance_scale_used) {}
+NeesStats nees_stats(std::vector<double> v) {
+  NeesStats s;
+  s.count = static_cast<int>(v.size());
+  if (v.empty()) return s;
+  s.mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  s.median = error_stats(v).median;
+  s.within_95 = static_cast<double>(std::count_if(v.begin(), v.end(), [](double x) { return x < kChi2_6_95; })) /
+                static_cast<double>(v.size());
+  return s;
+}
+
+AccuracyEvaluator::AccuracyEvaluator(const GroundTruth& groundtruth, GroundTruthAllowance allowance)
+    : groundtruth_(groundtruth), allowance_(std::move(allowance)) {}
+
+Matrix6d AccuracyEvaluator::allowance_covariance() const {
+  Vector6d d;
+  const double t2 = allowance_.translation_m * allowance_.translation_m;
+  const double r2 = allowance_.rotation_rad * allowance_.rotation_rad;
+  d << t2, t2, t2, r2, r2, r2;
+  return d.asDiagonal();
+}
 
 void AccuracyEvaluator::add(const PairResult& r, const Eigen::Isometry3d& pose) {
   ++pairs_;
   // The first pair also anchors its previous frame; only relative poses are ever compared.
-  if (trajectory_.empty()) trajectory_.emplace_back(r.t_prev_ns, pose * r.T_prev_curr.inverse());
+  if (trajectory_.empty()) {
+    trajectory_.emplace_back(r.t_prev_ns, pose * r.T_prev_curr.inverse());
+    groundtruth_origin_ = groundtruth_.at(r.t_prev_ns);
+  }
   trajectory_.emplace_back(r.t_curr_ns, pose);
+  steps_.push_back({r.t_prev_ns, r.t_curr_ns, r.status == Status::Ok, r.T_prev_curr, r.covariance});
   if (r.status != Status::Ok) {
     ++failures_[std::string(status_word(r.status))];
     return;
@@ -44,9 +72,48 @@ void AccuracyEvaluator::add(const PairResult& r, const Eigen::Isometry3d& pose) 
   const Eigen::Isometry3d error = gt_rel.inverse() * r.T_prev_curr;
   rpe_t_.push_back(error.translation().norm());
   rpe_r_.push_back(rotation_angle(error.linear()) * kRadToDeg);
-  const Vector6d e = xi_from_transform(r.T_prev_curr) - xi_from_transform(gt_rel);
-  nees_.push_back(e.dot(r.covariance.ldlt().solve(e)));
-  axis_nees_sum_ += e.cwiseAbs2().cwiseQuotient(r.covariance.diagonal());
+  EvaluatedPair p;
+  p.t_ns = r.t_curr_ns;
+  p.error = xi_from_transform(r.T_prev_curr) - xi_from_transform(gt_rel);
+  p.sigma = r.covariance.diagonal().cwiseSqrt();
+  p.nees = nees_of(p.error, r.covariance + allowance_covariance());
+  p.position = (trajectory_.front().second.inverse() * pose).translation();
+  if (groundtruth_origin_) p.groundtruth_position = (groundtruth_origin_->inverse() * *gt_curr).translation();
+  evaluated_.push_back(p);
+  evaluated_step_.push_back(steps_.size() - 1);
+}
+
+std::vector<AccuracyEvaluator::Window> AccuracyEvaluator::windows() const {
+  std::vector<Window> out;
+  const Matrix6d allowance = allowance_covariance();
+  for (size_t first = 0; first < steps_.size(); ++first) {
+    // The shortest run of consecutive good pairs from `first` that spans at least 1 s.
+    size_t last = first;
+    bool usable = true;
+    while (true) {
+      const Step& s = steps_[last];
+      usable = usable && s.ok && (last == first || steps_[last - 1].t_curr_ns == s.t_prev_ns);
+      if (!usable || s.t_curr_ns - steps_[first].t_prev_ns >= kWindowNs || last + 1 == steps_.size()) break;
+      ++last;
+    }
+    if (!usable || steps_[last].t_curr_ns - steps_[first].t_prev_ns < kWindowNs) continue;
+    const auto g0 = groundtruth_.at(steps_[first].t_prev_ns), g1 = groundtruth_.at(steps_[last].t_curr_ns);
+    if (!g0 || !g1) continue;
+    // T = T_first ... T_last; each pair's right perturbation reaches the product through
+    // Ad(B^-1), B the motions after it.
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    for (size_t k = first; k <= last; ++k) T = T * steps_[k].T;
+    Matrix6d c = Matrix6d::Zero();
+    Eigen::Isometry3d after = Eigen::Isometry3d::Identity();
+    for (size_t k = last + 1; k-- > first;) {
+      const Matrix6d ad = se3_adjoint(after.inverse());
+      c += ad * right_perturbation_covariance(steps_[k].T, steps_[k].covariance) * ad.transpose();
+      after = steps_[k].T * after;
+    }
+    const Vector6d e = right_perturbation_between(g0->inverse() * *g1, T);
+    out.push_back({first, last, nees_of(e, c + allowance)});
+  }
+  return out;
 }
 
 AccuracySummary AccuracyEvaluator::summary() const {
@@ -57,21 +124,53 @@ AccuracySummary AccuracyEvaluator::summary() const {
   s.evaluated = static_cast<int>(rpe_t_.size());
   s.rpe_translation_m = error_stats(rpe_t_);
   s.rpe_rotation_deg = error_stats(rpe_r_);
-  if (!nees_.empty()) {
-    s.mean_nees = std::accumulate(nees_.begin(), nees_.end(), 0.0) / static_cast<double>(nees_.size());
-    s.median_nees = error_stats(nees_).median;
-    s.nees_within_95 = static_cast<double>(std::count_if(nees_.begin(), nees_.end(), [](double x) { return x < kChi2_6_95; })) /
-                       static_cast<double>(nees_.size());
-    s.axis_nees = axis_nees_sum_ / static_cast<double>(nees_.size());
-    s.mean_axis_nees = s.axis_nees.mean();
-    s.consistent_scale = scale_used_ * s.mean_axis_nees;
+  s.allowance = allowance_;
+  const Matrix6d allowance = allowance_covariance();
+  std::vector<double> nees;
+  for (size_t i = 0; i < evaluated_.size(); ++i) {
+    const EvaluatedPair& p = evaluated_[i];
+    nees.push_back(p.nees);
+    const Vector6d var = steps_[evaluated_step_[i]].covariance.diagonal() + allowance.diagonal();
+    const Vector6d ratio = p.error.cwiseAbs2().cwiseQuotient(var);
+    s.axis_nees += ratio;
+    for (int a = 0; a < 6; ++a) s.axis_within_3sigma(a) += ratio(a) <= 9.0 ? 1 : 0;
   }
+  s.pair_nees = nees_stats(nees);
+  if (!evaluated_.empty()) {
+    s.axis_nees /= static_cast<double>(evaluated_.size());
+    s.axis_within_3sigma /= static_cast<double>(evaluated_.size());
+  }
+  std::vector<double> windows;
+  for (const Window& w : this->windows()) windows.push_back(w.nees);
+  s.window_nees = nees_stats(windows);
+
+  // Lag-1 correlation (Pearson) over pairs whose successor is the next evaluated pair.
+  std::vector<std::pair<Vector6d, Vector6d>> lagged;
+  for (size_t i = 0; i + 1 < evaluated_.size(); ++i)
+    if (evaluated_step_[i + 1] == evaluated_step_[i] + 1 &&
+        steps_[evaluated_step_[i]].t_curr_ns == steps_[evaluated_step_[i + 1]].t_prev_ns)
+      lagged.emplace_back(evaluated_[i].error, evaluated_[i + 1].error);
+  s.lag1_pairs = static_cast<int>(lagged.size());
+  if (lagged.size() >= 3) {
+    Vector6d ma = Vector6d::Zero(), mb = Vector6d::Zero();
+    for (const auto& [a, b] : lagged) ma += a, mb += b;
+    ma /= static_cast<double>(lagged.size());
+    mb /= static_cast<double>(lagged.size());
+    Vector6d sab = Vector6d::Zero(), saa = Vector6d::Zero(), sbb = Vector6d::Zero();
+    for (const auto& [a, b] : lagged) {
+      sab += (a - ma).cwiseProduct(b - mb);
+      saa += (a - ma).cwiseAbs2();
+      sbb += (b - mb).cwiseAbs2();
+    }
+    s.lag1_correlation = sab.cwiseQuotient(saa.cwiseProduct(sbb).cwiseSqrt());
+  }
+
   // Drift: relative pose error of the integrated trajectory over 1-second windows.
   std::vector<double> drift_t, drift_r;
   size_t j = 0;
   for (size_t i = 0; i < trajectory_.size(); ++i) {
     j = std::max(j, i + 1);
-    while (j < trajectory_.size() && trajectory_[j].first - trajectory_[i].first < kDriftWindowNs) ++j;
+    while (j < trajectory_.size() && trajectory_[j].first - trajectory_[i].first < kWindowNs) ++j;
     if (j >= trajectory_.size()) break;
     const auto gi = groundtruth_.at(trajectory_[i].first), gj = groundtruth_.at(trajectory_[j].first);
     if (!gi || !gj) continue;
@@ -84,6 +183,37 @@ AccuracySummary AccuracyEvaluator::summary() const {
   s.drift_translation_mps = error_stats(drift_t);
   s.drift_rotation_degps = error_stats(drift_r);
   return s;
+}
+
+std::vector<EvaluatedPair> AccuracyEvaluator::evaluated_pairs() const {
+  std::vector<EvaluatedPair> rows = evaluated_;
+  std::map<size_t, double> ending_at;  // the shortest window ending at each pair
+  for (const Window& w : windows()) ending_at[w.last] = w.nees;
+  for (size_t i = 0; i < rows.size(); ++i)
+    if (const auto w = ending_at.find(evaluated_step_[i]); w != ending_at.end()) rows[i].window_nees = w->second;
+  return rows;
+}
+
+void AccuracyEvaluator::write_csv(const std::string& path) const {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot create the evaluation file '" + path + "'");
+  f << "# rgbd-odometry evaluation against ground truth; error = xi(estimate) - xi(ground truth), xi = (t [m], "
+       "rotation vector [rad]); sd = sqrt of the reported variance (no allowance)\n";
+  f << "# ground-truth allowance: " << allowance_.translation_m << " m, " << allowance_.rotation_rad << " rad ("
+    << allowance_.origin << ")\n";
+  f << "t_s,e_tx,e_ty,e_tz,e_rx,e_ry,e_rz,sd_tx,sd_ty,sd_tz,sd_rx,sd_ry,sd_rz,nees,window_nees,x,y,z,gt_x,gt_y,gt_z\n";
+  f << std::setprecision(10);
+  for (const EvaluatedPair& p : evaluated_pairs()) {
+    f << static_cast<double>(p.t_ns) * 1e-9;
+    for (int a = 0; a < 6; ++a) f << ',' << p.error(a);
+    for (int a = 0; a < 6; ++a) f << ',' << p.sigma(a);
+    f << ',' << p.nees << ',';
+    if (p.window_nees >= 0) f << p.window_nees;
+    for (int a = 0; a < 3; ++a) f << ',' << p.position(a);
+    for (int a = 0; a < 3; ++a) f << ',' << p.groundtruth_position(a);
+    f << '\n';
+  }
+  if (!f.flush()) throw std::runtime_error("cannot write the evaluation file '" + path + "'");
 }
 
 }  // namespace rgbdo

@@ -17,16 +17,6 @@ std::uint64_t to_usec(std::int64_t t_ns) { return t_ns <= 0 ? 0 : static_cast<st
 
 }  // namespace
 
-Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r) {
-  const double angle = r.norm();
-  const Eigen::Matrix3d K = skew(r);
-  // Below ~1e-4 rad the closed form loses digits to cancellation; its series is exact there
-  // to double precision after three terms.
-  if (angle < 1e-4) return Eigen::Matrix3d::Identity() - 0.5 * K + (1.0 / 6.0) * K * K;
-  const double a2 = angle * angle;
-  return Eigen::Matrix3d::Identity() - (1 - std::cos(angle)) / a2 * K + (angle - std::sin(angle)) / (a2 * angle) * K * K;
-}
-
 Matrix6d camera_to_body_jacobian(const CameraExtrinsic& X, const Eigen::Isometry3d& T_body_prev_curr) {
   // t_b = R t_c + (I - dR_b) p and r_b = R r_c (conjugation keeps the angle, turns the axis).
   // Only the lever-arm term depends on the rotation: d(-exp(r) p)/dr = exp(r) [p]x Jr(r).

@@ -18,6 +18,10 @@ struct RunOptions {
   bool verbose = false;         // per-pair stage times and counts
   bool start_at_groundtruth = false;  // trajectory origin: ground-truth pose of the first frame
   int max_frames = 0;           // 0: all
+  // Evaluation against ground truth (when the source has it): the allowance for its own noise
+  // ("auto": estimated from it; "none"; "T_M,R_RAD") and a per-pair CSV for plots (empty: none).
+  std::string groundtruth_allowance = "auto";
+  std::string evaluation_path;
 };
 
 // Returns the process exit code: 0 ok, 1 input/output failure, 2 bad configuration.

@@ -27,4 +27,19 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 // Rotation angle of R in radians, in [0, pi].
 double rotation_angle(const Eigen::Matrix3d& R);
 
+// First-order uncertainty of composed motions uses right perturbations of SE(3):
+// T_true = T * Exp(delta), delta = (rho, phi), translation first. Composing A * T * B turns a
+// perturbation delta of T into Ad(B^-1) * delta of the product.
+Matrix6d se3_adjoint(const Eigen::Isometry3d& T);  // [[R, skew(t) R], [0, R]]
+
+// The right Jacobian of SO(3): exp(r + dr) ~ exp(r) * exp(J_r(r) dr).
+Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r);
+
+// A covariance of xi = (t, rotation vector) of T, expressed as a right perturbation of T
+// (rho = R^T dt, phi = J_r(r) dr).
+Matrix6d right_perturbation_covariance(const Eigen::Isometry3d& T, const Matrix6d& xi_covariance);
+
+// The right perturbation taking `reference` to `estimate`: (R_ref^T (t_est - t_ref), Log(R_ref^T R_est)).
+Vector6d right_perturbation_between(const Eigen::Isometry3d& reference, const Eigen::Isometry3d& estimate);
+
 }  // namespace rgbdo

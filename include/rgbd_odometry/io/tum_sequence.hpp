@@ -32,6 +32,7 @@ class GroundTruth {
   explicit GroundTruth(std::vector<StampedPose> poses) : poses_(std::move(poses)) {}
   bool empty() const { return poses_.empty(); }
   size_t size() const { return poses_.size(); }
+  const std::vector<StampedPose>& poses() const { return poses_; }
   // Empty when t lies outside the recording or in a gap longer than max_gap_ns.
   std::optional<Eigen::Isometry3d> at(std::int64_t t_ns, std::int64_t max_gap_ns = 120'000'000) const;
 

@@ -91,8 +91,7 @@ struct BodyMotion {
 };
 
 // ---- the linearisations, exposed for their tests -----------------------------------------
-// Right Jacobian of SO(3): exp(r + d) = exp(r) exp(Jr(r) d) to first order in d.
-Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r);
+// (so3_right_jacobian is in core/geometry.hpp.)
 // d xi_b / d xi_c at the given motion, for dT_b = X dT_c X^-1.
 Matrix6d camera_to_body_jacobian(const CameraExtrinsic& X, const Eigen::Isometry3d& T_body_prev_curr);
 BodyMotion body_motion(const PairResult& pair, const CameraExtrinsic& X);
