@@ -34,24 +34,63 @@ const Inliers& inliers() {
   return s;
 }
 
-void BM_Covariance_Batched(benchmark::State& state) {
-  const auto& s = inliers();
-  CovarianceConfig config;
-  config.perturbations = kPerturbations;
-  PerturbationCovariance cov(config, kPairs);
+Eigen::Isometry3d inliers_motion() {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(0.01, -0.005, 0.02);
+  return T;
+}
+
+CovarianceConfig benchmark_config() {
+  CovarianceConfig config;
+  config.perturbations = kPerturbations;
+  return config;
+}
+
+void count_perturbations(benchmark::State& state, const PerturbationCovariance& cov) {
+  state.SetLabel(std::string("kernel ") + cov.kernel_name());
+  state.counters["perturbations/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * kPerturbations, benchmark::Counter::kIsRate);
+}
+
+void BM_Covariance_Batched(benchmark::State& state) {
+  const auto& s = inliers();
+  PerturbationCovariance cov(benchmark_config(), kPairs);
+  const Eigen::Isometry3d T = inliers_motion();
   Matrix6d c;
   std::uint64_t seed = 0;
   for (auto _ : state) {
     Rng rng(seed++);
     benchmark::DoNotOptimize(cov.estimate(s.prev, s.curr, T, rng, c));
   }
-  state.SetLabel(std::string("kernel ") + cov.kernel_name());
-  state.counters["perturbations/s"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * kPerturbations, benchmark::Counter::kIsRate);
+  count_perturbations(state, cov);
 }
 BENCHMARK(BM_Covariance_Batched)->Unit(benchmark::kMicrosecond);
+
+// The pipeline's default path: the physical model's per-point noise, the inliers resampled by
+// 12 image cells in every perturbation, the variance factor and the capture-time term (two
+// more weighted fits).
+void BM_Covariance_BatchedPhysical(benchmark::State& state) {
+  const auto& s = inliers();
+  PerturbationCovariance cov(benchmark_config(), kPairs);
+  const Eigen::Isometry3d T = inliers_motion();
+  std::vector<PointNoise> np, nc;
+  std::vector<std::uint16_t> cells;
+  for (int k = 0; k < kPairs; ++k) {
+    const auto i = static_cast<size_t>(k);
+    np.push_back(physical_point_noise(s.prev[i], k % 8, Eigen::Vector2d(0.002, 0), SensorNoise{}));
+    nc.push_back(physical_point_noise(s.curr[i], k % 8, Eigen::Vector2d(0.002, 0), SensorNoise{}));
+    np.back().depth_rate_mps = nc.back().depth_rate_mps = -0.3;
+    cells.push_back(static_cast<std::uint16_t>(k % 12));
+  }
+  Matrix6d c;
+  std::uint64_t seed = 0;
+  for (auto _ : state) {
+    Rng rng(seed++);
+    benchmark::DoNotOptimize(cov.estimate(s.prev, s.curr, np, nc, cells, T, 0.002, rng, c));
+  }
+  count_perturbations(state, cov);
+}
+BENCHMARK(BM_Covariance_BatchedPhysical)->Unit(benchmark::kMicrosecond);
 
 void BM_Covariance_EigenUmeyamaLoop(benchmark::State& state) {
   const auto& s = inliers();

@@ -51,12 +51,7 @@ inline Matrix6d straightforward_covariance(const std::vector<Eigen::Vector3d>& p
     xi.tail<3>() = aa.axis() * aa.angle();
     xs.push_back(xi);
   }
-  Vector6d mean = Vector6d::Zero();
-  for (const auto& x : xs) mean += x;
-  mean /= static_cast<double>(xs.size());
-  Matrix6d c = Matrix6d::Zero();
-  for (const auto& x : xs) c += (x - mean) * (x - mean).transpose();
-  return c / static_cast<double>(xs.size() - 1);
+  return sample_covariance(xs);
 }
 
 class PaperReproduction {

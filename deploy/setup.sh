@@ -8,6 +8,10 @@
 #                           AddressSanitizer + UndefinedBehaviorSanitizer, then ThreadSanitizer
 #   deploy/setup.sh bench   build, then run the Google Benchmark programs and the ARM cost
 #                           model (the armhf build's instructions per frame, per stage)
+#   deploy/setup.sh plots [TUM_DIR]
+#                           build, replay TUM_DIR (default: the bundled frames) and plot its
+#                           evaluation against ground truth into build/plots/ (error with +-1/3
+#                           sigma per axis, NEES per pair and per 1-s window, trajectories)
 #   deploy/setup.sh deps    only install the dependencies
 #
 # Idempotent: re-running it re-uses the build directories under build/.
@@ -21,6 +25,7 @@ packages=(
   build-essential cmake pkg-config
   libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  python3-matplotlib
 )
 # The armhf cross build, its sysroot and emulators (qemu-user-static runs the armhf tests;
 # qemu-user's dynamic qemu-arm loads the ARM cost model's plugin), and systemd-analyze for the
@@ -109,6 +114,19 @@ run_tests() {
   unset TSAN_OPTIONS
 }
 
+run_plots() {
+  local dir=${1:-test/data/fr1_xyz}
+  local name
+  name=$(basename "$dir")
+  build build/release -DCMAKE_BUILD_TYPE=Release
+  mkdir -p build/plots
+  log "replaying $dir with the evaluation against its ground truth (allowance 0.3 mm, 0.0015 rad)"
+  build/release/rgbd-odometry --source "tum:$dir" --config deploy/config/tum-fr1.yaml -q \
+    --groundtruth-allowance 0.0003,0.0015 --evaluation "build/plots/$name.csv"
+  bench/plot_evaluation.py "build/plots/$name.csv" "build/plots/$name" "$name"
+  log "plots: build/plots/${name}_errors.png ${name}_nees.png ${name}_trajectory.png"
+}
+
 run_benchmarks() {
   deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
   build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
@@ -127,5 +145,6 @@ case "$job" in
   demo) install_dependencies "${packages[@]}"; run_demo ;;
   test) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_tests ;;
   bench) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_benchmarks ;;
-  *) echo "usage: deploy/setup.sh demo|test|bench|deps" >&2; exit 2 ;;
+  plots) install_dependencies "${packages[@]}"; run_plots "${2:-}" ;;
+  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|deps" >&2; exit 2 ;;
 esac

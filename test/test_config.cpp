@@ -42,6 +42,9 @@ TEST(Config, DefaultsAreThePapersTable1) {
   EXPECT_EQ(c.ransac.max_iterations, 200);
   EXPECT_EQ(c.covariance.perturbations, 100);
   EXPECT_DOUBLE_EQ(c.covariance.depth_noise_coeff, 1.425e-3);
+  // No factor fitted to a recording: the noise model as it stands (README "Covariance you can fuse").
+  EXPECT_EQ(c.covariance.model, "physical");
+  EXPECT_DOUBLE_EQ(c.covariance.scale, 1.0);
   EXPECT_NO_THROW(validate(c));
 }
 
@@ -52,6 +55,8 @@ TEST(Config, ShippedFr1ConfigLoadsWithTumCalibration) {
   EXPECT_DOUBLE_EQ(c.camera.distortion[0], 0.262383);
   EXPECT_DOUBLE_EQ(c.camera.distortion[4], 1.163314);
   EXPECT_DOUBLE_EQ(c.depth.units_per_m, 5000);
+  EXPECT_DOUBLE_EQ(c.covariance.scale, 1.0);
+  EXPECT_EQ(c.covariance.model, "physical");
   EXPECT_NO_THROW(validate(c));
 }
 
@@ -124,6 +129,15 @@ TEST(ConfigValidation, CrossFieldChecksNameTheKey) {
   c = Config{};
   c.features.border_px = 400;
   expect_error_naming([&] { validate(c); }, "features.border_px");
+  c = Config{};
+  c.covariance.model = "gaussian";
+  expect_error_naming([&] { validate(c); }, "covariance.model");
+  c = Config{};
+  c.covariance.timing_sigma_s = 5;  // seconds: a unit mistake
+  expect_error_naming([&] { validate(c); }, "covariance.timing_sigma_s");
+  c = Config{};
+  c.covariance.resample_cell_px = -1;
+  expect_error_naming([&] { validate(c); }, "covariance.resample_cell_px");
 }
 
 TEST(ConfigValidation, KeysWhereZeroIsSingularRefuseZero) {

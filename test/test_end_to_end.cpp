@@ -2,6 +2,9 @@
 // motion-capture ground truth.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
 #include "rgbd_odometry/io/evaluate.hpp"
 #include "rgbd_odometry/pipeline/integrate.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
@@ -17,11 +20,14 @@ struct Replay {
   AccuracySummary summary;
 };
 
+// The ground truth's own noise allowed for as the project's issue 12 judges: 0.3 mm, 0.0015 rad.
+const GroundTruthAllowance kAllowance{0.0003, 0.0015, "given"};
+
 Replay replay(const Config& config) {
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
   OdometryPipeline pipeline(config);
   TrajectoryIntegrator integrator;
-  AccuracyEvaluator evaluator(seq.groundtruth, allowance_from(estimate_groundtruth_noise(seq.groundtruth.poses())));
+  AccuracyEvaluator evaluator(seq.groundtruth, kAllowance);
   Replay out;
   for (const auto& ref : seq.frames) {
     const auto r = pipeline.process(load_tum_frame(ref, config.depth.units_per_m, 640, 480));
@@ -49,25 +55,43 @@ TEST(EndToEnd, EveryPairSucceedsWithASaneCovariance) {
   }
 }
 
-TEST(EndToEnd, AccuracyBeatsThePaperReproduction) {
-  // Bounds: the straightforward reproduction of the paper measures 10.6 mm / 0.44 deg RMSE
-  // on the full fr1_xyz; this pipeline measures 4.9 mm / 0.30 deg there (README). On these
-  // 40 frames it must at least beat the reproduction, with margin left for float and
-  // library-version differences.
+TEST(EndToEnd, AccuracyHoldsItsMeasuredLevel) {
+  // Measured on these 40 frames: 4.40 mm / 0.306 deg frame to frame, 0.015 m/s / 0.466 deg/s
+  // over 1 s (the paper reproduction: 10.6 mm / 0.44 deg on the full sequence). Bounds ~5 %
+  // above, room for float and library-version differences, not for a worse pipeline.
   const auto& s = default_replay().summary;
   EXPECT_EQ(s.evaluated, 39);
-  EXPECT_LT(s.rpe_translation_m.rmse, 0.0080);
-  EXPECT_LT(s.rpe_rotation_deg.rmse, 0.40);
-  EXPECT_LT(s.drift_translation_mps.rmse, 0.045);
-  EXPECT_LT(s.drift_rotation_degps.rmse, 1.6);
+  EXPECT_LT(s.rpe_translation_m.rmse, 0.0046);
+  EXPECT_LT(s.rpe_rotation_deg.rmse, 0.322);
+  EXPECT_LT(s.drift_translation_mps.rmse, 0.016);
+  EXPECT_LT(s.drift_rotation_degps.rmse, 0.49);
 }
 
-TEST(EndToEnd, CovarianceIsOfTheRightMagnitudePerAxis) {
-  // The default scale makes the per-axis normalised squared errors average ~1 over the full
-  // sequence; on any 40-frame stretch they must stay within an order of magnitude.
+TEST(EndToEnd, CovarianceIsConsistentWithoutAFittedScale) {
+  // The physical noise model at covariance.scale = 1, against ground truth with its allowance.
+  // Measured on these frames: joint NEES per pair mean 7.76 (84.6 % below the chi2(6) gate),
+  // per axis mean e^2/var t 2.02 1.22 2.33, r 1.39 2.02 0.33. A covariance 10x too large or
+  // too small leaves these bands.
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  ASSERT_EQ(config.covariance.scale, 1.0);
   const auto& s = default_replay().summary;
-  EXPECT_GT(s.axis_nees.mean(), 0.1);
-  EXPECT_LT(s.axis_nees.mean(), 10.0);
+  EXPECT_GT(s.pair_nees.mean, 6.2);
+  EXPECT_LT(s.pair_nees.mean, 9.3);
+  EXPECT_GT(s.pair_nees.within_95, 0.78);
+  for (int a = 0; a < 6; ++a) {
+    EXPECT_GT(s.axis_nees(a), 0.25) << "axis " << a;
+    EXPECT_LT(s.axis_nees(a), 3.0) << "axis " << a;
+  }
+}
+
+TEST(EndToEnd, ThePapersNoiseModelAloneIsOverConfident) {
+  // For comparison, the paper's model (eq. 2 perturbations, no variance factor, scale 1):
+  // measured mean NEES 115 on these frames, 15x ours.
+  Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  c.covariance.model = "paper";
+  c.covariance.residual_variance_factor = false;
+  const auto paper = replay(c).summary;
+  EXPECT_GT(paper.pair_nees.mean, 8 * default_replay().summary.pair_nees.mean);
 }
 
 TEST(EndToEnd, TimingCompensationImprovesTranslation) {
@@ -125,6 +149,69 @@ TEST(EndToEnd, APairTheWindowMissesIsMatchedAgainOverTheWholeImage) {
   EXPECT_EQ(narrow.inliers, full.inliers);
   EXPECT_TRUE(narrow.T_prev_curr.isApprox(full.T_prev_curr, 0));
   EXPECT_EQ(narrow.covariance, full.covariance);
+}
+
+// The size of a covariance's translation and rotation blocks: sqrt of their traces.
+struct Spread {
+  double translation_m, rotation_rad;
+};
+Spread spread(const Matrix6d& c) {
+  return {std::sqrt(c.topLeftCorner<3, 3>().trace()), std::sqrt(c.bottomRightCorner<3, 3>().trace())};
+}
+
+TEST(HardFrames, TheCovarianceGrowsWhenTheFramesGetWorse) {
+  // One real pair (frames 10 and 11), then the same pair made hard four ways. Each is still
+  // solved and must report a larger covariance: a consumer weighs a poor measurement by it.
+  // Measured (sqrt of the trace of the translation / rotation block, against 3.5 mm / 3.3 mrad):
+  // blur 14 mm / 15 mrad (33 inliers of 227), depth in a corner only 10 mm / 7.4 mrad, 80
+  // features 15 mm / 16 mrad (18 inliers), frames 1.2 s apart 18 mm / 27 mrad (47 inliers).
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  const auto frame = [&](size_t i) { return load_tum_frame(seq.frames[i], 5000, 640, 480); };
+  const auto solve = [&](const Config& c, RgbdFrame a, RgbdFrame b) {
+    OdometryPipeline pipeline(c);
+    EXPECT_FALSE(pipeline.process(std::move(a)));
+    return *pipeline.process(std::move(b));
+  };
+  const PairResult normal = solve(config, frame(10), frame(11));
+  ASSERT_EQ(normal.status, Status::Ok);
+  const Spread base = spread(normal.covariance);
+
+  const auto blurred = [&](size_t i) {  // motion blur: a 13-px diagonal smear, as a fast turn leaves
+    RgbdFrame f = frame(i);
+    cv::Mat kernel = cv::Mat::zeros(13, 13, CV_32F);
+    for (int k = 0; k < 13; ++k) kernel.at<float>(k, k) = 1.0f / 13;
+    cv::filter2D(f.gray, f.gray, -1, kernel);
+    return f;
+  };
+  const auto masked = [&](size_t i) {  // depth only in a 200 x 160 corner: most of the view lost
+    RgbdFrame f = frame(i);
+    cv::Mat keep = cv::Mat::zeros(f.depth_m.size(), CV_8U);
+    keep(cv::Rect(40, 40, 200, 160)).setTo(255);
+    cv::Mat cut;
+    f.depth_m.copyTo(cut, keep);
+    f.depth_m = cut;
+    return f;
+  };
+  Config few = config;
+  few.features.max_features = 80;  // few features, so few inliers
+
+  struct Case {
+    const char* name;
+    PairResult r;
+  };
+  const Case cases[] = {
+      {"motion blur on the newer frame", solve(config, frame(10), blurred(11))},
+      {"most of the image without depth", solve(config, masked(10), masked(11))},
+      {"few features", solve(few, frame(10), frame(11))},
+      {"frames 1.2 s apart", solve(config, frame(10), frame(39))},
+  };
+  for (const Case& c : cases) {
+    ASSERT_EQ(c.r.status, Status::Ok) << c.name;
+    const Spread s = spread(c.r.covariance);
+    EXPECT_GT(s.translation_m, 2.0 * base.translation_m) << c.name;
+    EXPECT_GT(s.rotation_rad, 2.0 * base.rotation_rad) << c.name;
+  }
 }
 
 TEST(EndToEnd, TexturelessAndDepthlessFramesFailCleanlyAndTrackingResumes) {

@@ -72,7 +72,7 @@ TEST(Ransac, RayAlignedNoiseIsBetterFitAnisotropically) {
   Vector6d xi;
   xi << 0.01, 0.005, -0.02, 0.004, -0.006, 0.003;
   const Eigen::Isometry3d truth = transform_from_xi(xi);
-  const SensorNoise noise{1.425e-3, 0.25, 525};
+  const SensorNoise noise{1.425e-3, 0.25, 1.2, 0.8, 525, 525};
   double err_plain = 0, err_aniso = 0;
   for (unsigned seed = 0; seed < 20; ++seed) {
     std::mt19937 rng(seed);

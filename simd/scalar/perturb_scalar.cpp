@@ -32,15 +32,18 @@ void perturbation_sums_scalar(const PerturbationInput& in, const PerturbationSum
       float n[6][L];
       draw_six(state, n);
       for (int l = 0; l < L; ++l) {
-        const float s[3] = {in.sx[k] + in.sigma_sx[k] * n[0][l], in.sy[k] + in.sigma_sy[k] * n[1][l],
-                            in.sz[k] + in.sigma_sz[k] * n[2][l]};
-        const float d[3] = {in.dx[k] + in.sigma_dx[k] * n[3][l], in.dy[k] + in.sigma_dy[k] * n[4][l],
-                            in.dz[k] + in.sigma_dz[k] * n[5][l]};
+        const float s[3] = {(in.sx[k] + in.sigma_sx[k] * n[0][l]) + in.ray_sx[k] * n[2][l],
+                            (in.sy[k] + in.sigma_sy[k] * n[1][l]) + in.ray_sy[k] * n[2][l],
+                            in.sz[k] + in.ray_sz[k] * n[2][l]};
+        const float d[3] = {(in.dx[k] + in.sigma_dx[k] * n[3][l]) + in.ray_dx[k] * n[5][l],
+                            (in.dy[k] + in.sigma_dy[k] * n[4][l]) + in.ray_dy[k] * n[5][l],
+                            in.dz[k] + in.ray_dz[k] * n[5][l]};
+        const float w = in.w[k] * in.cell_weight[static_cast<long>(in.cell[k]) * in.perturbations + b * L + l];
         float ws[3];
         for (int j = 0; j < 3; ++j) {
-          ws[j] = in.w[k] * s[j];
+          ws[j] = w * s[j];
           S[j][l] = S[j][l] + ws[j];
-          D[j][l] = D[j][l] + in.w[k] * d[j];
+          D[j][l] = D[j][l] + w * d[j];
         }
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j) M[3 * i + j][l] = M[3 * i + j][l] + d[i] * ws[j];

@@ -89,6 +89,10 @@ inline __m256 add_mul(float base, float sigma, __m256 n) {
   return _mm256_add_ps(_mm256_set1_ps(base), _mm256_mul_ps(_mm256_set1_ps(sigma), n));
 }
 
+inline __m256 add_mul(__m256 base, float sigma, __m256 n) {
+  return _mm256_add_ps(base, _mm256_mul_ps(_mm256_set1_ps(sigma), n));
+}
+
 }  // namespace
 
 void perturbation_sums_avx2(const PerturbationInput& in, const PerturbationSums& out) {
@@ -115,11 +119,15 @@ void perturbation_sums_avx2(const PerturbationInput& in, const PerturbationSums&
         const __m256i c = next(st);
         box_muller(a, c, n[2 * pair], n[2 * pair + 1]);
       }
-      const __m256 s[3] = {add_mul(in.sx[k], in.sigma_sx[k], n[0]), add_mul(in.sy[k], in.sigma_sy[k], n[1]),
-                           add_mul(in.sz[k], in.sigma_sz[k], n[2])};
-      const __m256 d[3] = {add_mul(in.dx[k], in.sigma_dx[k], n[3]), add_mul(in.dy[k], in.sigma_dy[k], n[4]),
-                           add_mul(in.dz[k], in.sigma_dz[k], n[5])};
-      const __m256 w = _mm256_set1_ps(in.w[k]);
+      const __m256 s[3] = {add_mul(add_mul(in.sx[k], in.sigma_sx[k], n[0]), in.ray_sx[k], n[2]),
+                           add_mul(add_mul(in.sy[k], in.sigma_sy[k], n[1]), in.ray_sy[k], n[2]),
+                           add_mul(in.sz[k], in.ray_sz[k], n[2])};
+      const __m256 d[3] = {add_mul(add_mul(in.dx[k], in.sigma_dx[k], n[3]), in.ray_dx[k], n[5]),
+                           add_mul(add_mul(in.dy[k], in.sigma_dy[k], n[4]), in.ray_dy[k], n[5]),
+                           add_mul(in.dz[k], in.ray_dz[k], n[5])};
+      const __m256 w = _mm256_mul_ps(
+          _mm256_set1_ps(in.w[k]),
+          _mm256_loadu_ps(in.cell_weight + static_cast<long>(in.cell[k]) * in.perturbations + b * L));
       __m256 ws[3];
       for (int j = 0; j < 3; ++j) {
         ws[j] = _mm256_mul_ps(w, s[j]);

@@ -55,7 +55,11 @@ std::vector<Param> param_table(Config& c) {
       {"ransac.min_inliers", &c.ransac.min_inliers, 3, 1000000},
       {"ransac.adaptive_stop", &c.ransac.adaptive_stop},
       {"covariance.perturbations", &c.covariance.perturbations, 8, 100000},
+      {"covariance.model", &c.covariance.model},
       {"covariance.depth_noise_coeff", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
+      {"covariance.depth_lateral_sigma_px", &c.covariance.depth_lateral_sigma_px, 0.0, 100},
+      {"covariance.timing_sigma_s", &c.covariance.timing_sigma_s, -1, 1},
+      {"covariance.resample_cell_px", &c.covariance.resample_cell_px, 0, 1e5},
       {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
       {"covariance.residual_variance_factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},
@@ -230,6 +234,9 @@ void validate(const Config& config) {
     throw ConfigError("config key 'camera.cx': principal point lies outside the image");
   if (2 * c.features.border_px >= std::min(c.camera.width, c.camera.height))
     throw ConfigError("config key 'features.border_px': the border leaves no image");
+  if (!listed(kCovarianceModels, c.covariance.model))
+    throw ConfigError("config key 'covariance.model': unknown model '" + c.covariance.model + "' (" +
+                      joined(kCovarianceModels) + ")");
   if (!listed(kFeatureDetectors, c.features.detector))
     throw ConfigError("config key 'features.detector': unknown detector '" + c.features.detector + "' (" +
                       joined(kFeatureDetectors) + ")");

@@ -29,6 +29,15 @@ Eigen::Isometry3d transform_from_xi(const Vector6d& xi) {
   return T;
 }
 
+Matrix6d sample_covariance(const std::vector<Vector6d>& samples) {
+  Vector6d mean = Vector6d::Zero();
+  for (const auto& x : samples) mean += x;
+  mean /= static_cast<double>(samples.size());
+  Matrix6d c = Matrix6d::Zero();
+  for (const auto& x : samples) c += (x - mean) * (x - mean).transpose();
+  return c / static_cast<double>(samples.size() - 1);
+}
+
 double rotation_angle(const Eigen::Matrix3d& R) {
   // acos of the trace loses precision near 0, where frame-to-frame rotations live.
   return Eigen::AngleAxisd(R).angle();

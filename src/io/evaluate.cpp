@@ -7,6 +7,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "rgbd_odometry/core/time_format.hpp"
+
 namespace rgbdo {
 namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
@@ -204,7 +206,7 @@ void AccuracyEvaluator::write_csv(const std::string& path) const {
   f << "t_s,e_tx,e_ty,e_tz,e_rx,e_ry,e_rz,sd_tx,sd_ty,sd_tz,sd_rx,sd_ry,sd_rz,nees,window_nees,x,y,z,gt_x,gt_y,gt_z\n";
   f << std::setprecision(10);
   for (const EvaluatedPair& p : evaluated_pairs()) {
-    f << static_cast<double>(p.t_ns) * 1e-9;
+    f << format_seconds(p.t_ns);
     for (int a = 0; a < 6; ++a) f << ',' << p.error(a);
     for (int a = 0; a < 6; ++a) f << ',' << p.sigma(a);
     f << ',' << p.nees << ',';

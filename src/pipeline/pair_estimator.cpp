@@ -1,6 +1,8 @@
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 #include "rgbd_odometry/core/clock.hpp"
@@ -54,6 +56,7 @@ void predict_positions(const KeypointGeometry& prev, const MotionPrior& prior, d
 
 PairEstimator::PairEstimator(const Config& config)
     : config_(config),
+      noise_(sensor_noise(config)),
       matcher_(config.matching.ratio),
       ransac_(config.ransac, sensor_noise(config), config.features.max_features),
       covariance_(config.covariance, config.features.max_features) {
@@ -63,6 +66,9 @@ PairEstimator::PairEstimator(const Config& config)
   matcher_.reserve(config.features.max_features);
   predicted_.reserve(capacity);
   for (auto* v : {&pairs_.prev, &pairs_.curr, &inlier_prev_, &inlier_curr_}) v->reserve(capacity);
+  inlier_prev_noise_.reserve(capacity);
+  inlier_cells_.reserve(capacity);
+  inlier_curr_noise_.reserve(capacity);
   pairs_.match_index.reserve(capacity);
   fit_.inliers.reserve(capacity);
   refined_.inliers.reserve(capacity);
@@ -99,6 +105,44 @@ Status PairEstimator::match_and_fit(const ProcessedFrame& prev, const ProcessedF
   return fit_.status;
 }
 
+void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s) {
+  inlier_prev_noise_.clear();
+  inlier_curr_noise_.clear();
+  inlier_cells_.clear();
+  const double cell_px = config_.covariance.resample_cell_px;
+  const int cell_columns = cell_px > 0 ? static_cast<int>(std::ceil(config_.camera.width / cell_px)) : 1;
+  // Depth rates at the keypoints under this pair's own motion, as the timing compensation
+  // (backproject.hpp) computes them: what a capture-time error does to each depth.
+  const MotionPrior own = dt_s > 0 ? motion_from(fit_.T_prev_curr, dt_s) : MotionPrior{};
+  const auto depth_rate = [&](const Eigen::Vector3d& p, const Eigen::Vector2d& gradient,
+                              const Eigen::Vector2d& pixel_velocity) {
+    return -(own.velocity_mps + own.angular_velocity_radps.cross(p)).z() - gradient.dot(pixel_velocity);
+  };
+  for (size_t n = 0; n < fit_.inliers.size(); ++n) {
+    const auto k = static_cast<size_t>(fit_.inliers[n]);
+    const Match& m = matches_[static_cast<size_t>(pairs_.match_index[k])];
+    const auto i = static_cast<size_t>(m.prev), j = static_cast<size_t>(m.curr);
+    const Eigen::Vector2d pixel_velocity =
+        dt_s > 0 ? Eigen::Vector2d((curr.geometry.pixel[j] - prev.geometry.pixel[i]) / dt_s) : Eigen::Vector2d::Zero();
+    // Detectors other than ORB's pyramid number their octaves otherwise: kept within ORB's levels.
+    const auto level = [&](const cv::KeyPoint& kp) { return std::clamp(kp.octave, 0, config_.features.orb_levels - 1); };
+    PointNoise np = physical_point_noise(pairs_.prev[k], level(prev.features.keypoints[i]),
+                                         prev.geometry.depth_gradient[i], noise_);
+    PointNoise nc = physical_point_noise(pairs_.curr[k], level(curr.features.keypoints[j]),
+                                         curr.geometry.depth_gradient[j], noise_);
+    np.depth_rate_mps = depth_rate(pairs_.prev[k], prev.geometry.depth_gradient[i], pixel_velocity);
+    nc.depth_rate_mps = depth_rate(pairs_.curr[k], curr.geometry.depth_gradient[j], pixel_velocity);
+    inlier_prev_noise_.push_back(np);
+    inlier_curr_noise_.push_back(nc);
+    if (cell_px > 0) {
+      const Eigen::Vector2d& u = curr.geometry.pixel[j];
+      const int column = std::clamp(static_cast<int>(u.x() / cell_px), 0, cell_columns - 1);
+      const int row = std::clamp(static_cast<int>(u.y() / cell_px), 0, 255);
+      inlier_cells_.push_back(static_cast<std::uint16_t>(row * cell_columns + column));
+    }
+  }
+}
+
 PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index) {
   PairResult r;
   r.t_prev_ns = prev.times.t_colour_ns;
@@ -114,6 +158,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (curr.status != Status::Ok) return fail(curr.status);
   if (prev.status != Status::Ok) return fail(prev.status);
   const double dt_s = static_cast<double>(r.t_curr_ns - r.t_prev_ns) * 1e-9;
+  stamp_jitter_.add(prev.times, curr.times);
 
   const CostStagesEnd stages_end;
   const bool compensate = config_.depth.compensate_timing && dt_s > 0;
@@ -150,15 +195,24 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   }
 
   mark_cost_stage(CostStage::Covariance);
+  t0 = Clock::now();
   inlier_prev_.clear();
   inlier_curr_.clear();
   for (int k : fit_.inliers) {
     inlier_prev_.push_back(pairs_.prev[static_cast<size_t>(k)]);
     inlier_curr_.push_back(pairs_.curr[static_cast<size_t>(k)]);
   }
-  t0 = Clock::now();
   Matrix6d cov;
-  const bool cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
+  bool cov_ok;
+  if (config_.covariance.model == "paper") {
+    cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
+  } else {
+    describe_inlier_noise(prev, curr, dt_s);
+    const double timing_sigma_s =
+        config_.covariance.timing_sigma_s >= 0 ? config_.covariance.timing_sigma_s : stamp_jitter_.offset_sigma_s();
+    cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, inlier_prev_noise_, inlier_curr_noise_, inlier_cells_,
+                                  fit_.T_prev_curr, timing_sigma_s, covariance_rng, cov);
+  }
   r.times.covariance_ms = ms_since(t0);
   if (!cov_ok) return fail(Status::CovarianceFailed);
 

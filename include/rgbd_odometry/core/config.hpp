@@ -68,15 +68,32 @@ struct RansacConfig {
   bool adaptive_stop = true;
 };
 
+inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "paper"};
+
 struct CovarianceConfig {
   int perturbations = 100;
-  double depth_noise_coeff = 1.425e-3;  // sigma_Z = coeff * Z^2 (Willis & Brink eq. 2), 1/m
-  // Keypoint localisation error, used with the depth noise to weight the final fit.
-  double pixel_sigma_px = 0.25;
-  // Multiply by the fit's a-posteriori variance factor (covariance.hpp); false: the paper.
+  // "physical" (core/noise_model.hpp: keypoint error by pyramid level, axial and lateral depth
+  // noise, capture-time error) or "paper" (Willis & Brink eq. 2 only, for comparison).
+  std::string model = "physical";
+  double depth_noise_coeff = 1.425e-3;  // sigma_Z = coeff * Z^2 (Khoshelham & Elberink 2012), 1/m
+  // Keypoint localisation error at full resolution: corners found on the integer pixel grid
+  // without sub-pixel refinement are off by a uniform +-0.5 px, sigma 1/sqrt(12) = 0.289 px;
+  // a pyramid level's grid is features.orb_scale_factor^level coarser. Also weights the fit.
+  double pixel_sigma_px = 0.289;
+  // Lateral noise of the depth map (Nguyen, Izadi & Lovell 2012, Kinect: ~0.8 px): a depth is
+  // read where the surface is off by this much sideways, which matters where depth is steep.
+  double depth_lateral_sigma_px = 0.8;
+  // Standard deviation of a frame's colour-to-depth capture-time offset error, seconds; < 0:
+  // estimated online from the jitter of the streams' own frame intervals.
+  double timing_sigma_s = -1;
+  // Each perturbation also resamples the inliers by image cells of this size (pixels; a
+  // Bayesian bootstrap by cell, covariance.hpp): errors that vary smoothly over the image are
+  // shared by a cell's points. 0: no resampling.
+  double resample_cell_px = 160;
+  // Multiply the noise by the fit's a-posteriori variance factor (covariance.hpp); false: the paper.
   bool residual_variance_factor = true;
-  // Multiplies the sample covariance before it is reported; see README "Covariance scale".
-  double scale = 7.0;
+  // Multiplies the covariance before it is reported; 1: the noise model as it stands.
+  double scale = 1.0;
 };
 
 // A live OpenNI2 sensor (ignored for recorded sources).

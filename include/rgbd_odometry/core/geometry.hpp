@@ -3,6 +3,7 @@
 // xi = (tx, ty, tz, rx, ry, rz) with (rx, ry, rz) the rotation vector (axis * angle).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 
 namespace rgbdo {
 
@@ -23,6 +24,9 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
       -v.y(), v.x(), 0;
   return S;
 }
+
+// The unbiased sample covariance of parameter vectors (at least two).
+Matrix6d sample_covariance(const std::vector<Vector6d>& samples);
 
 // Rotation angle of R in radians, in [0, pi].
 double rotation_angle(const Eigen::Matrix3d& R);

@@ -1,10 +1,20 @@
 #pragma once
-// The depth sensor's measurement noise (Willis & Brink eq. 2, after Khoshelham & Elberink):
-//   sigma_Z = c Z^2,  sigma_X = |X/Z| sigma_Z,  sigma_Y = |Y/Z| sigma_Z,  c = 1.425e-3 / m.
-// point_sigma() is that model, used to perturb points for the covariance as the paper does.
-// point_covariance() is its physical form for the final fit: a depth error moves the point
-// along its viewing ray m = P / Z (so X, Y, Z errors are fully correlated), and the
-// keypoint's pixel error moves it across the ray.
+// How each measured 3-D point is wrong: the noise models of the covariance and the fit's weights.
+//
+// The paper's model (Willis & Brink eq. 2, after Khoshelham & Elberink 2012):
+//   sigma_Z = c Z^2,  sigma_X = |X/Z| sigma_Z,  sigma_Y = |Y/Z| sigma_Z,  c = 1.425e-3 / m,
+// three independent errors. It leaves out what moves a keypoint's point sideways, which is
+// most of a feature method's error.
+//
+// The physical model follows the measurement P = Z (x_n, y_n, 1):
+//  - the keypoint's pixel is off by sigma_px = pixel_sigma_px * scale^level in u and v (its
+//    pyramid level's grid), moving P across the viewing ray by sigma_px Z / f;
+//  - the depth is off along the ray: axially c Z^2 (Khoshelham & Elberink), plus, where the
+//    surface is steep in the image, the depth slope |grad Z| (m/px) times the pixel error and
+//    times the depth map's own lateral noise (Nguyen, Izadi & Lovell 2012: ~0.8 px);
+//  - a capture-time error of the frame's depth moves every depth by its rate dZ/dt times the
+//    same error (depth_rate_mps), an error common to the frame, handled by the covariance.
+// point_covariance() is the 3x3 form the final fit weights by.
 #include <Eigen/Core>
 #include <cmath>
 
@@ -12,37 +22,76 @@
 
 namespace rgbdo {
 
+// One point's noise as the perturbation kernel draws it:
+//   P' = P + (lateral.x n0, lateral.y n1, 0) + ray n2,   n ~ N(0, 1).
+struct PointNoise {
+  Eigen::Vector2d lateral = Eigen::Vector2d::Zero();  // sigma of X and Y, m
+  Eigen::Vector3d ray = Eigen::Vector3d::Zero();      // direction times sigma, m
+  double depth_rate_mps = 0;                           // dZ/dt at the keypoint (timing errors)
+  Eigen::Matrix3d covariance() const {
+    Eigen::Matrix3d c = ray * ray.transpose();
+    c(0, 0) += lateral.x() * lateral.x();
+    c(1, 1) += lateral.y() * lateral.y();
+    return c;
+  }
+};
+
+// The paper's (sigma_X, sigma_Y, sigma_Z).
 inline Eigen::Vector3d point_sigma(const Eigen::Vector3d& p, double depth_noise_coeff) {
   const double sz = depth_noise_coeff * p.z() * p.z();
   return {std::abs(p.x() / p.z()) * sz, std::abs(p.y() / p.z()) * sz, sz};
 }
 
-// Weight of a correspondence in a least-squares fit: inverse of its total expected variance.
-inline double pair_weight(const Eigen::Vector3d& prev, const Eigen::Vector3d& curr, double depth_noise_coeff) {
-  return 1.0 / (point_sigma(prev, depth_noise_coeff).squaredNorm() + point_sigma(curr, depth_noise_coeff).squaredNorm());
+inline PointNoise paper_point_noise(const Eigen::Vector3d& p, double depth_noise_coeff) {
+  const Eigen::Vector3d s = point_sigma(p, depth_noise_coeff);
+  PointNoise n;
+  n.lateral = s.head<2>();
+  n.ray = {0, 0, s.z()};
+  return n;
 }
 
-// The noise of one camera's measurements. Its defaults are the configuration's (one home for
-// each number: config.hpp); sensor_noise() takes a loaded configuration's.
+// The physical model's parameters (one home for each number: config.hpp).
 struct SensorNoise {
   double depth_noise_coeff = CovarianceConfig{}.depth_noise_coeff;  // sigma_Z = c Z^2
-  double pixel_sigma_px = CovarianceConfig{}.pixel_sigma_px;        // keypoint localisation error
-  double focal_px = CameraConfig{}.fx;
+  double pixel_sigma_px = CovarianceConfig{}.pixel_sigma_px;        // keypoint error at level 0
+  double level_scale = FeatureConfig{}.orb_scale_factor;            // pyramid scale per level
+  double depth_lateral_sigma_px = CovarianceConfig{}.depth_lateral_sigma_px;
+  double fx = CameraConfig{}.fx, fy = CameraConfig{}.fy;
 };
 
 inline SensorNoise sensor_noise(const Config& c) {
-  return {c.covariance.depth_noise_coeff, c.covariance.pixel_sigma_px, c.camera.fx};
+  return {c.covariance.depth_noise_coeff, c.covariance.pixel_sigma_px, c.features.orb_scale_factor,
+          c.covariance.depth_lateral_sigma_px, c.camera.fx, c.camera.fy};
 }
 
-inline Eigen::Matrix3d point_covariance(const Eigen::Vector3d& p, const SensorNoise& noise) {
+inline double keypoint_sigma_px(int level, const SensorNoise& noise) {
+  return noise.pixel_sigma_px * std::pow(noise.level_scale, std::max(0, level));
+}
+
+// depth_gradient: dZ/du, dZ/dv in metres per pixel at the keypoint.
+inline PointNoise physical_point_noise(const Eigen::Vector3d& p, int level, const Eigen::Vector2d& depth_gradient,
+                                       const SensorNoise& noise) {
   const double z = p.z();
-  const double sz = noise.depth_noise_coeff * z * z;
-  const double sl = noise.pixel_sigma_px * z / noise.focal_px;
-  const Eigen::Vector3d ray = p / z;
-  Eigen::Matrix3d c = sz * sz * ray * ray.transpose();
-  c(0, 0) += sl * sl;
-  c(1, 1) += sl * sl;
-  return c;
+  const double sp = keypoint_sigma_px(level, noise);
+  const double axial = noise.depth_noise_coeff * z * z;
+  const double slope2 = depth_gradient.squaredNorm();
+  const double sl = noise.depth_lateral_sigma_px;
+  PointNoise n;
+  n.lateral = {sp * z / noise.fx, sp * z / noise.fy};
+  n.ray = std::sqrt(axial * axial + slope2 * (sp * sp + sl * sl)) * (p / z);
+  return n;
+}
+
+// The 3x3 covariance of a point for the final fit's weights (no slope term: the fit's weights
+// see the point only).
+inline Eigen::Matrix3d point_covariance(const Eigen::Vector3d& p, const SensorNoise& noise) {
+  return physical_point_noise(p, 0, Eigen::Vector2d::Zero(), noise).covariance();
+}
+
+// Weight of a correspondence in the covariance's least-squares refits: inverse of the paper
+// model's total variance (the estimate's own RANSAC-stage weights).
+inline double pair_weight(const Eigen::Vector3d& prev, const Eigen::Vector3d& curr, double depth_noise_coeff) {
+  return 1.0 / (point_sigma(prev, depth_noise_coeff).squaredNorm() + point_sigma(curr, depth_noise_coeff).squaredNorm());
 }
 
 }  // namespace rgbdo

@@ -14,6 +14,7 @@
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/pipeline/ransac.hpp"
+#include "rgbd_odometry/pipeline/stamp_jitter.hpp"
 
 namespace rgbdo {
 
@@ -35,7 +36,12 @@ class PairEstimator {
   Status match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
                        double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_index, PairResult& r);
 
+  // The noise and image cell of each inlier (inlier_prev_noise_, inlier_curr_noise_,
+  // inlier_cells_) for the covariance.
+  void describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s);
+
   Config config_;
+  SensorNoise noise_;
   SymmetricMatcher matcher_;
   RigidRansac ransac_;
   PerturbationCovariance covariance_;
@@ -44,6 +50,9 @@ class PairEstimator {
   PointPairs pairs_;
   RansacResult fit_, refined_;
   std::vector<Eigen::Vector3d> inlier_prev_, inlier_curr_;
+  std::vector<PointNoise> inlier_prev_noise_, inlier_curr_noise_;
+  std::vector<std::uint16_t> inlier_cells_;  // image cell of each inlier (current frame)
+  StampJitter stamp_jitter_;
   // Velocity of the last good pair: the motion prior for timing compensation.
   std::optional<MotionPrior> last_motion_;
 };
