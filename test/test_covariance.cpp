@@ -162,7 +162,7 @@ TEST(PerturbationCovariance, ResamplingByCellCapturesErrorsSharedWithinACell) {
   // ...against what one realisation reports, averaged over realisations
   PerturbationCovariance pc(physical_config(100), 240);
   Matrix6d with_cells = Matrix6d::Zero(), without = Matrix6d::Zero();
-  for (int t = 0; t < 40; ++t) {
+  for (int t = 0; t < 200; ++t) {
     realisation(prev, curr);
     Eigen::Isometry3d fit;
     w.assign(prev.size(), 0.0);
@@ -171,15 +171,17 @@ TEST(PerturbationCovariance, ResamplingByCellCapturesErrorsSharedWithinACell) {
     Matrix6d a, b;
     ASSERT_TRUE(pc.estimate(prev, curr, noise, noise, cells, fit, 0.0, rng, a));
     ASSERT_TRUE(pc.estimate(prev, curr, noise, noise, {}, fit, 0.0, rng, b));
-    with_cells += a / 40, without += b / 40;
+    with_cells += a / 200, without += b / 200;
   }
   // THEN the per-point model alone misses nearly all of the error (measured 0.2-2 % of it), the
-  // resampled one most of it: measured 0.72-0.84 on translation, 0.61-0.67 on rotation (a
-  // bootstrap over 12 clusters is biased low by about 11/12, and more where few cells pull).
+  // resampled one most of it: over ten seeds on x86-64 (and armhf, whose libm draws other
+  // data) 0.66-0.89 on translation, 0.62-0.74 on rotation. A bootstrap over 12 clusters is
+  // biased low by about 11/12, more where few cells pull; one realisation's estimate scatters
+  // by ~40 %, the mean of 200 by ~3 %.
   for (int i = 0; i < 6; ++i) {
     EXPECT_LT(without(i, i), 0.05 * truth(i, i)) << "axis " << i;
-    EXPECT_GT(with_cells(i, i), (i < 3 ? 0.65 : 0.55) * truth(i, i)) << "axis " << i;
-    EXPECT_LT(with_cells(i, i), (i < 3 ? 1.0 : 0.8) * truth(i, i)) << "axis " << i;
+    EXPECT_GT(with_cells(i, i), (i < 3 ? 0.6 : 0.55) * truth(i, i)) << "axis " << i;
+    EXPECT_LT(with_cells(i, i), (i < 3 ? 1.0 : 0.85) * truth(i, i)) << "axis " << i;
   }
 }
 

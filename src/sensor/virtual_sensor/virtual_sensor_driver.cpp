@@ -38,27 +38,20 @@
 #include <thread>
 #include <vector>
 
-#include "rgbd_odometry/core/uri_query.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
+#include "virtual_sensor_uri.hpp"
 
 namespace {
 
+using rgbdo::virtual_sensor::Options;
+using rgbdo::virtual_sensor::parse_uri;
+
 constexpr int kWidth = 640, kHeight = 480, kFps = 30;
-constexpr const char* kScheme = "rgbdo-virtual:";
 
 struct Event {
   std::int64_t t_ns;
   bool colour;
   std::string path;
-};
-
-struct Options {
-  std::string directory;
-  double rate = 1.0;
-  std::set<int> drop;
-  int stall_at = -1, stall_ms = 0;
-  int disconnect_at = -1;
-  int reconnect_ms = -1;  // -1: never comes back
 };
 
 // What outlives one open of a device: the recording's clock (it runs on while the device is
@@ -74,48 +67,6 @@ struct Timeline {
     return exhausted || (disconnected && std::chrono::steady_clock::now() < back_at);
   }
 };
-
-bool parse_int(std::string_view text, int& out) {
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
-  return ec == std::errc() && end == text.data() + text.size();
-}
-
-bool parse_uri(const std::string& uri, Options& o) {
-  if (uri.rfind(kScheme, 0) != 0) return false;
-  const std::string rest = uri.substr(std::strlen(kScheme));
-  const auto q = rest.find('?');
-  o.directory = rest.substr(0, q);
-  if (q == std::string::npos) return !o.directory.empty();
-  bool ok = true;
-  const auto malformed = rgbdo::for_each_query_pair(std::string_view(rest).substr(q + 1), [&](std::string_view key,
-                                                                                             std::string_view value) {
-    if (key == "rate") {
-      const std::string text(value);
-      char* end = nullptr;
-      o.rate = std::strtod(text.c_str(), &end);
-      ok = ok && end == text.c_str() + text.size();
-    } else if (key == "drop") {
-      while (!value.empty()) {
-        const auto comma = value.find(',');
-        int i = 0;
-        ok = ok && parse_int(value.substr(0, comma), i);
-        o.drop.insert(i);
-        value = comma == std::string_view::npos ? std::string_view{} : value.substr(comma + 1);
-      }
-    } else if (key == "stall") {
-      const auto colon = value.find(':');
-      ok = ok && colon != std::string_view::npos && parse_int(value.substr(0, colon), o.stall_at) &&
-           parse_int(value.substr(colon + 1), o.stall_ms);
-    } else if (key == "disconnect") {
-      ok = ok && parse_int(value, o.disconnect_at);
-    } else if (key == "reconnect") {
-      ok = ok && parse_int(value, o.reconnect_ms);
-    } else if (key != "id") {
-      ok = false;
-    }
-  });
-  return ok && !malformed && !o.directory.empty() && o.rate > 0;
-}
 
 // Colour and depth images of the recording in time order, read by the program's own TUM
 // reader (io/tum_sequence.hpp); empty when the recording cannot be read.

@@ -1,0 +1,28 @@
+# MODE=replay: run FUZZER once over every file in INPUTS (a missing directory: nothing to do).
+# MODE=fuzz: copy INPUTS to WORK and fuzz from it for SECONDS (single process, so that a
+# finding names its input and the run stays within its time on a shared 2-core machine).
+if(MODE STREQUAL "replay")
+  file(GLOB inputs ${INPUTS}/*)
+  if(NOT inputs)
+    message(STATUS "no regression inputs in ${INPUTS}")
+    return()
+  endif()
+  execute_process(COMMAND ${FUZZER} ${inputs} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+else()
+  file(REMOVE_RECURSE ${WORK})
+  file(MAKE_DIRECTORY ${WORK}/corpus ${WORK}/artifacts)
+  file(GLOB seeds ${INPUTS}/*)
+  if(NOT seeds)
+    message(FATAL_ERROR "no seed corpus in ${INPUTS}")
+  endif()
+  file(COPY ${seeds} DESTINATION ${WORK}/corpus)
+  execute_process(
+    COMMAND ${FUZZER} ${WORK}/corpus -max_total_time=${SECONDS} -timeout=30 -rss_limit_mb=2048
+            -artifact_prefix=${WORK}/artifacts/ -print_final_stats=1
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+endif()
+string(REGEX MATCH "stat::number_of_executed_units: *[0-9]+" runs "${err}")
+message(STATUS "${FUZZER}: ${runs}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${FUZZER} failed (${rc}):\n${err}")
+endif()
