@@ -5,7 +5,8 @@
 #   deploy/setup.sh demo    build, then replay the bundled fr1_xyz frames (the main job)
 #   deploy/setup.sh test    build for x86-64 and armhf (Odroid-XU3), run the whole test suite
 #                           natively, on armhf under qemu, and natively again under
-#                           AddressSanitizer + UndefinedBehaviorSanitizer, then ThreadSanitizer
+#                           AddressSanitizer + UndefinedBehaviorSanitizer, then ThreadSanitizer,
+#                           then fuzzes every parser of outside input (libFuzzer) for a bounded time
 #   deploy/setup.sh bench   build, then run the Google Benchmark programs and the ARM cost
 #                           model (the armhf build's instructions per frame, per stage)
 #   deploy/setup.sh plots [TUM_DIR]
@@ -28,9 +29,9 @@ packages=(
   python3-matplotlib
 )
 # The armhf cross build, its sysroot and emulators (qemu-user-static runs the armhf tests;
-# qemu-user's dynamic qemu-arm loads the ARM cost model's plugin), and systemd-analyze for the
-# package test.
-cross_packages=(g++-arm-linux-gnueabihf mmdebstrap qemu-user-static qemu-user systemd)
+# qemu-user's dynamic qemu-arm loads the ARM cost model's plugin), systemd-analyze for the
+# package test, and clang with libFuzzer for the fuzz targets.
+cross_packages=(g++-arm-linux-gnueabihf mmdebstrap qemu-user-static qemu-user systemd clang libclang-rt-14-dev)
 
 log() { printf '\n== %s\n' "$*"; }
 
@@ -112,6 +113,16 @@ run_tests() {
   (cd build/tsan && ctest --output-on-failure -j "$jobs" -E \
     'OpenNiSource.AnUnpluggedSensorIsReportedWithinTheTimeout|RealtimeFaults.AnUnpluggedSensorIsReopenedAndThePairAcrossTheGapIsFlagged|RealtimeFaults.AStopRequestEndsARunWaitingForALostSensorWithinASecond|FlightLinkAutopilot.OverAPseudoTerminalPx4ConvergesAndOdometryIsUnchanged|FlightLinkAutopilot.ALatePeerIsFoundAndAVanishedAutopilotIsReported')
   unset TSAN_OPTIONS
+  # libFuzzer: every parser of outside input, instrumented with ASan + UBSan, built by clang
+  # (Debian's clang and its compiler-rt carry libFuzzer); the kept crash inputs replayed,
+  # then each target fuzzed from its seed corpus for RGBDO_FUZZ_SECONDS (30) seconds.
+  log "building the fuzz targets (clang, libFuzzer, ASan + UBSan)"
+  CC=clang CXX=clang++ cmake -S . -B build/fuzz -DRGBDO_WERROR=ON -DRGBDO_FUZZ=ON -DRGBDO_BUILD_TESTS=OFF \
+    -DRGBDO_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  cmake --build build/fuzz -j "$jobs" --target \
+    fuzz_config_file fuzz_config_overrides fuzz_tum_sequence fuzz_uris fuzz_images fuzz_mavlink
+  log "fuzzing: regression inputs, then a bounded run of every target"
+  (cd build/fuzz && UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j "$jobs")
 }
 
 run_plots() {

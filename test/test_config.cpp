@@ -90,6 +90,23 @@ TEST_F(ConfigFile, MissingAndCorruptFilesAreNamed) {
   expect_error_naming([&] { load_config(write("bad.yaml", "%YAML:1.0\n---\ncamera: [1, {\n")); }, "bad.yaml");
 }
 
+TEST_F(ConfigFile, WhatOpenCvsReaderCannotTakeIsRefusedByLine) {
+  // Each of these once hung OpenCV's YAML reader for ever or escaped it as an exception other
+  // than a ConfigError (found by test/fuzz/fuzz_config_file; the inputs are kept there too).
+  expect_error_naming([&] { load_config(write("i.yaml", "%YAML:1.0\n---\n  width: 640\n----\n")); }, "line 3");
+  expect_error_naming([&] { load_config(write("d.yaml", "%YAML:1.0\n-----\ncamera:\n  fx: 500\n")); }, "line 2");
+  expect_error_naming([&] { load_config(write("t.yaml", "%YAML:1.0\n---\ncamera:\n  fx: 500\n---\nseed: 2\n")); },
+                      "line 5");
+  expect_error_naming([&] { load_config(write("s.yaml", "%YAML:1.0\n---\ncamera: 5\n")); }, "s.yaml");
+}
+
+TEST_F(ConfigFile, ACalibrationMatrixDeclaringAHugeSizeIsRefusedBeforeItIsRead) {
+  write("huge.yaml", "%YAML:1.0\n---\ncamera_matrix: !!opencv-matrix\n  rows: 1000000000\n  cols: 3\n  dt: d\n"
+                     "  data: [1., 0., 0.]\n");
+  const auto p = write("m.yaml", "%YAML:1.0\n---\ncamera:\n  calibration_file: huge.yaml\n");
+  expect_error_naming([&] { load_config(p); }, "1000000000 x 3");
+}
+
 TEST_F(ConfigFile, IntrinsicsFromAnOpenCvCalibrationFile) {
   write("calib.yaml",
         "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n"

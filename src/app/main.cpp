@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
   if (!scale.empty()) options.overrides.push_back("covariance.scale=" + scale);
   if (!seed.empty()) options.overrides.push_back("seed=" + seed);
   // SIGINT / SIGTERM: finish the frame in hand, flush every output, print the summary.
-  std::signal(SIGINT, [](int) { rgbdo::request_stop(); });
-  std::signal(SIGTERM, [](int) { rgbdo::request_stop(); });
+  std::signal(SIGINT, rgbdo::on_stop_signal);
+  std::signal(SIGTERM, rgbdo::on_stop_signal);
   return rgbdo::run_odometry(options, std::cout, std::cerr);
 }

@@ -1,10 +1,13 @@
 #include "rgbd_odometry/app/run.hpp"
 
 #include <atomic>
+#include <cstdlib>
 #include <iomanip>
 #include <memory>
+#include <optional>
 #include <ostream>
 
+#include "rgbd_odometry/app/process_resources.hpp"
 #include "rgbd_odometry/app/report.hpp"
 #include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/config.hpp"
@@ -21,6 +24,7 @@ namespace rgbdo {
 namespace {
 
 std::atomic<bool> g_stop{false};
+std::atomic<bool> g_running{false};  // frames are being processed: a stop finishes them first
 constexpr std::int64_t kLinkStatusPeriod_ns = 10'000'000'000;
 
 // The configuration file, then the overrides in order, then --link; checked as a whole.
@@ -112,10 +116,18 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   int timed_pairs = 0;
   int rematched_pairs = 0;
   size_t pair_count = 0;
+  // Resources after warm-up and at the latest sample, taken on the output thread while every
+  // pipeline thread runs: a long run's summary shows whether memory, descriptors or threads grow.
+  constexpr std::uint64_t kWarmUpFrames = 200, kResourcePeriod = 50;
+  std::uint64_t output_frames = 0;
+  std::optional<ProcessResources> warm, latest;
   std::string output_error;
   // Runs on the pipeline's output thread, one frame at a time, in capture order.
   const auto on_output = [&](const PairOutput& item) {
     if (!output_error.empty()) return;
+    ++output_frames;
+    if (output_frames == kWarmUpFrames) warm = process_resources(output_frames);
+    if (output_frames > kWarmUpFrames && output_frames % kResourcePeriod == 0) latest = process_resources(output_frames);
     try {
       if (!item.frame_problem.empty()) err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns) << ": " << item.frame_problem << "\n";
       if (!item.has_pair) {
@@ -169,6 +181,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
         }
       });
     }
+    g_running = true;  // stays so: a signal while the summary is written asks for no more than a stop
     run = pipeline.run(g_stop);
   } catch (const ConfigError& e) {
     err << "rgbd-odometry: configuration error: " << e.what() << "\n";
@@ -190,6 +203,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, rematched_pairs, run);
+  if (warm && latest) out << "  resources: " << describe(*warm) << "; " << describe(*latest) << "\n";
   if (flight) {
     const LinkStats st = flight->stats();
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down
@@ -206,5 +220,12 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
 }
 
 void request_stop() { g_stop = true; }
+
+void on_stop_signal(int signal_number) {
+  // Before the run (reading the configuration, opening the source) nothing is in hand to
+  // finish, and a vendor parser or driver may not return: end at once, as without a handler.
+  if (!g_running) std::_Exit(128 + signal_number);
+  g_stop = true;
+}
 
 }  // namespace rgbdo

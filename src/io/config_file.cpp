@@ -1,6 +1,7 @@
 #include "rgbd_odometry/io/config_file.hpp"
 
 #include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/core/persistence.hpp>
 
@@ -29,6 +30,26 @@ void set_from_node(Config& c, const std::string& path, const std::string& key, c
     throw ConfigError("config file '" + path + "': unknown key '" + key + "'");
 }
 
+// An OpenCV matrix node of at most max_elements values (empty when absent). Its declared size
+// is checked before OpenCV allocates it: a file declaring 10^9 rows must not take the memory
+// (found by fuzz_config_file).
+cv::Mat small_matrix(const cv::FileNode& node, const std::string& path, const char* name, int max_elements) {
+  if (node.empty()) return {};
+  const auto refuse = [&](const std::string& why) {
+    return ConfigError("camera.calibration_file '" + path + "': '" + name + "' " + why);
+  };
+  if (!node.isMap()) throw refuse("is not an OpenCV matrix (rows, cols, dt, data)");
+  const cv::FileNode rows_node = node["rows"], cols_node = node["cols"];
+  if (!rows_node.isInt() || !cols_node.isInt()) throw refuse("has no whole-number rows and cols");
+  const int rows = static_cast<int>(rows_node), cols = static_cast<int>(cols_node);
+  if (rows <= 0 || cols <= 0 || static_cast<long long>(rows) * cols > max_elements)
+    throw refuse("declares " + std::to_string(rows) + " x " + std::to_string(cols) + " values (at most " +
+                 std::to_string(max_elements) + ")");
+  cv::Mat m;
+  node >> m;
+  return m;
+}
+
 // Intrinsics from an OpenCV calibration file (calibrateCamera's usual output keys).
 void load_calibration_file(Config& c, const std::string& path) {
   cv::FileStorage fs;
@@ -39,16 +60,16 @@ void load_calibration_file(Config& c, const std::string& path) {
   }
   if (!fs.isOpened())
     throw ConfigError("camera.calibration_file '" + path + "': cannot open");
-  cv::Mat K, dist;
-  fs["camera_matrix"] >> K;
-  fs["distortion_coefficients"] >> dist;
+  const cv::Mat K = small_matrix(fs["camera_matrix"], path, "camera_matrix", 9);
+  cv::Mat dist = small_matrix(fs["distortion_coefficients"], path, "distortion_coefficients", 5);
   if (K.rows != 3 || K.cols != 3)
     throw ConfigError("camera.calibration_file '" + path + "': 'camera_matrix' must be 3x3");
-  K.convertTo(K, CV_64F);
-  c.camera.fx = K.at<double>(0, 0);
-  c.camera.fy = K.at<double>(1, 1);
-  c.camera.cx = K.at<double>(0, 2);
-  c.camera.cy = K.at<double>(1, 2);
+  cv::Mat K64;
+  K.convertTo(K64, CV_64F);
+  c.camera.fx = K64.at<double>(0, 0);
+  c.camera.fy = K64.at<double>(1, 1);
+  c.camera.cx = K64.at<double>(0, 2);
+  c.camera.cy = K64.at<double>(1, 2);
   if (!dist.empty()) {
     if (dist.total() < 4 || dist.total() > 5)
       throw ConfigError("camera.calibration_file '" + path +
@@ -64,11 +85,41 @@ void load_calibration_file(Config& c, const std::string& path) {
   if (h > 0) c.camera.height = h;
 }
 
-}  // namespace
+// What this program's configuration looks like, checked before OpenCV's YAML reader sees it:
+// that reader hangs for ever on some malformed files (a line of dashes after an indented first
+// entry, or in place of the document marker: found by fuzz_config_file), so what it cannot be
+// given is refused here. One document ("---" once, before the first entry), entries starting
+// at the beginning of a line, text without NUL bytes, at most 1 MB.
+void check_layout(const std::string& path) {
+  constexpr std::uintmax_t kMaxBytes = 1 << 20;
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (ec) throw ConfigError("config file '" + path + "' cannot be read: " + ec.message());
+  if (bytes > kMaxBytes) throw ConfigError("config file '" + path + "' is larger than 1 MB: not a configuration");
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  int number = 0;
+  bool marker = false, entry = false;
+  const auto refuse = [&](const std::string& why) {
+    return ConfigError("config file '" + path + "' line " + std::to_string(number) + ": " + why);
+  };
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find('\0') != std::string::npos) throw refuse("a NUL byte: not a text file");
+    if (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) {
+      if (line != "---" || marker || entry) throw refuse("'" + line.substr(0, 8) + "': one YAML document, '---' once before the entries");
+      marker = true;
+      continue;
+    }
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#' || (!entry && line.rfind("%YAML", 0) == 0)) continue;
+    if (!entry && first != 0) throw refuse("the first entry is indented; sections start at the line's beginning");
+    entry = true;
+  }
+}
 
-Config load_config(const std::string& path) {
-  if (!std::filesystem::exists(path))
-    throw ConfigError("config file '" + path + "' does not exist");
+Config parse_config_file(const std::string& path) {
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
@@ -82,7 +133,8 @@ Config load_config(const std::string& path) {
   if (!root.isMap()) throw ConfigError("config file '" + path + "' must hold a mapping of sections");
 
   // The calibration file goes first so that explicit keys in this file still win.
-  const cv::FileNode calib = root["camera"]["calibration_file"];
+  const cv::FileNode camera = root["camera"];
+  const cv::FileNode calib = camera.isMap() ? camera["calibration_file"] : cv::FileNode();
   if (!calib.empty()) {
     std::filesystem::path calib_path = static_cast<std::string>(calib);
     if (calib_path.is_relative()) calib_path = std::filesystem::path(path).parent_path() / calib_path;
@@ -110,6 +162,25 @@ Config load_config(const std::string& path) {
     }
   }
   return c;
+}
+
+}  // namespace
+
+Config load_config(const std::string& path) {
+  if (!std::filesystem::exists(path))
+    throw ConfigError("config file '" + path + "' does not exist");
+  // OpenCV's reader asserts on shapes it does not expect and lets standard exceptions out of
+  // its parser (both found by fuzz_config_file): what they say is still about this file.
+  check_layout(path);
+  try {
+    return parse_config_file(path);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const cv::Exception& e) {
+    throw ConfigError("config file '" + path + "' cannot be read: " + e.err);
+  } catch (const std::exception& e) {
+    throw ConfigError("config file '" + path + "' cannot be read: " + e.what());
+  }
 }
 
 }  // namespace rgbdo

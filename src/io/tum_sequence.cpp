@@ -26,7 +26,11 @@ std::optional<std::int64_t> parse_timestamp_ns(const std::string& text) {
   if (!std::all_of(whole.begin(), whole.end(), ::isdigit) || !std::all_of(frac.begin(), frac.end(), ::isdigit))
     return std::nullopt;
   frac.resize(9, '0');
-  return std::stoll(whole) * 1'000'000'000LL + std::stoll(frac);
+  // Nanoseconds in 64 bits reach the year 2262: a larger second count is no timestamp (an
+  // 11-digit one overflowed here, found by fuzz_tum_sequence).
+  const long long seconds = std::stoll(whole);
+  if (seconds > 9'000'000'000LL) return std::nullopt;
+  return seconds * 1'000'000'000LL + std::stoll(frac);
 }
 
 namespace {

@@ -31,4 +31,8 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
 // Asks a running run_odometry to finish the current frame, flush and return (signal-safe).
 void request_stop();
 
+// The SIGINT / SIGTERM handler: request_stop() while frames are processed; before that (the
+// configuration read, the source opened) the process ends at once with status 128 + signal.
+void on_stop_signal(int signal_number);
+
 }  // namespace rgbdo

@@ -5,7 +5,7 @@
 // OpenNI2 loads it like any vendor driver, so code under test reads it exactly as it reads a
 // PrimeSense sensor.
 //
-// URI: rgbdo-virtual:<TUM directory>[?rate=R&drop=i,j&stall=i:ms&disconnect=i&reconnect=ms]
+// URI: rgbdo-virtual:<TUM directory>[?rate=R&drop=i,j&stall=i:ms&disconnect=i&reconnect=ms&loop=N]
 //   rate        playback speed (1 = recorded rate)
 //   drop        colour frame indices never delivered (their index is skipped, as a USB drop)
 //   stall       before colour frame i, both streams stop for `ms` milliseconds
@@ -13,6 +13,8 @@
 //   reconnect   `ms` after the disconnect the device is plugged back in: it can be opened
 //               again and plays on from the frames recorded by then (the scene went on
 //               while it was away), as a sensor on a loose cable does
+//   loop        play the recording this many times, one pass after the other on one clock
+//               and one frame numbering (soak runs)
 // Other parameters (say id=3, to tell otherwise equal URIs apart) are ignored.
 // When the recording has been played to its end the device unplugs itself for good: a
 // program reading it sees what it would see of a sensor pulled out for ever.
@@ -268,41 +270,46 @@ class VirtualDevice : public oni::driver::DeviceBase {
     };
     double stalled_s = 0;
     int colour_index = 0, depth_index = 0;
-    for (const Event& e : events) {
-      if (stop_) return;
-      if (e.colour && colour_index == options_.disconnect_at && !resumed) {
-        {
-          std::lock_guard<std::mutex> lock(timeline_->mutex);
-          timeline_->disconnected = true;
-          timeline_->back_at = options_.reconnect_ms < 0
-                                   ? std::chrono::steady_clock::time_point::max()
-                                   : std::chrono::steady_clock::now() + std::chrono::milliseconds(options_.reconnect_ms);
+    // Each pass of a looped recording follows the last one a frame period later, on one clock.
+    const std::int64_t pass_ns = events.back().t_ns - t0_ns + 1'000'000'000 / kFps;
+    for (int pass = 0; pass < options_.loops; ++pass) {
+      for (const Event& e : events) {
+        if (stop_) return;
+        const std::int64_t t_ns = e.t_ns + pass * pass_ns;
+        if (e.colour && colour_index == options_.disconnect_at && !resumed) {
+          {
+            std::lock_guard<std::mutex> lock(timeline_->mutex);
+            timeline_->disconnected = true;
+            timeline_->back_at = options_.reconnect_ms < 0
+                                     ? std::chrono::steady_clock::time_point::max()
+                                     : std::chrono::steady_clock::now() + std::chrono::milliseconds(options_.reconnect_ms);
+          }
+          on_disconnect_();
+          return;
         }
-        on_disconnect_();
-        return;
+        if (e.colour && colour_index == options_.stall_at) stalled_s += options_.stall_ms * 1e-3;
+        const double due_s = static_cast<double>(t_ns - t0_ns) * 1e-9 / options_.rate + stalled_s;
+        const auto timestamp_us = static_cast<std::uint64_t>((t_ns - t0_ns + 500) / 1000);
+        const int index = e.colour ? colour_index++ : depth_index++;
+        // Re-plugged: what was recorded while the device was away is gone.
+        if (resumed && due_s < std::chrono::duration<double>(opened - start).count()) continue;
+        while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        if (e.colour && options_.drop.count(index)) continue;
+        // A frame of another size is dropped (the reader sees the gap in the indices), a huge
+        // one from its PNG header, before it is decoded.
+        const auto declared = rgbdo::png_declared_size(e.path);
+        if (declared && (declared->first != std::uint32_t{kWidth} || declared->second != std::uint32_t{kHeight})) continue;
+        cv::Mat image = cv::imread(e.path, e.colour ? cv::IMREAD_COLOR : cv::IMREAD_ANYDEPTH);
+        if (image.empty() || image.cols != kWidth || image.rows != kHeight) continue;
+        if (e.colour) {
+          cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
+        } else {
+          image.convertTo(image, CV_16U, 2.0);  // TUM: 5000 per metre = 0.2 mm; 100 um units: x2, exact
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        VirtualStream* s = e.colour ? colour_ : depth_;
+        if (s) s->deliver(image, timestamp_us, index);
       }
-      if (e.colour && colour_index == options_.stall_at) stalled_s += options_.stall_ms * 1e-3;
-      const double due_s = static_cast<double>(e.t_ns - t0_ns) * 1e-9 / options_.rate + stalled_s;
-      const auto timestamp_us = static_cast<std::uint64_t>((e.t_ns - t0_ns + 500) / 1000);
-      const int index = e.colour ? colour_index++ : depth_index++;
-      // Re-plugged: what was recorded while the device was away is gone.
-      if (resumed && due_s < std::chrono::duration<double>(opened - start).count()) continue;
-      while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      if (e.colour && options_.drop.count(index)) continue;
-      // A frame of another size is dropped (the reader sees the gap in the indices), a huge
-      // one from its PNG header, before it is decoded.
-      const auto declared = rgbdo::png_declared_size(e.path);
-      if (declared && (declared->first != std::uint32_t{kWidth} || declared->second != std::uint32_t{kHeight})) continue;
-      cv::Mat image = cv::imread(e.path, e.colour ? cv::IMREAD_COLOR : cv::IMREAD_ANYDEPTH);
-      if (image.empty() || image.cols != kWidth || image.rows != kHeight) continue;
-      if (e.colour) {
-        cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
-      } else {
-        image.convertTo(image, CV_16U, 2.0);  // TUM: 5000 per metre = 0.2 mm; 100 um units: x2, exact
-      }
-      std::lock_guard<std::mutex> lock(mutex_);
-      VirtualStream* s = e.colour ? colour_ : depth_;
-      if (s) s->deliver(image, timestamp_us, index);
     }
     // The last frames are out; a frame period later the recording's device leaves.
     const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(100 / options_.rate));

@@ -21,6 +21,7 @@ struct Options {
   int stall_at = -1, stall_ms = 0;
   int disconnect_at = -1;
   int reconnect_ms = -1;  // -1: never comes back
+  int loops = 1;
 };
 
 inline bool parse_int(std::string_view text, int& out) {
@@ -59,6 +60,8 @@ inline bool parse_uri(const std::string& uri, Options& o) {
           ok = ok && parse_int(value, o.disconnect_at);
         } else if (key == "reconnect") {
           ok = ok && parse_int(value, o.reconnect_ms);
+        } else if (key == "loop") {
+          ok = ok && parse_int(value, o.loops) && o.loops >= 1;
         } else if (key != "id") {
           ok = false;
         }

@@ -1,0 +1,41 @@
+#include "rgbd_odometry/app/process_resources.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <system_error>
+
+namespace rgbdo {
+
+ProcessResources process_resources(std::uint64_t frames) {
+  ProcessResources r;
+  r.frames = frames;
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    std::istringstream fields(line);
+    std::string key;
+    fields >> key;
+    if (key == "VmRSS:") {
+      double kb = 0;
+      fields >> kb;
+      r.rss_mb = kb / 1024.0;
+    } else if (key == "Threads:") {
+      fields >> r.threads;
+    }
+  }
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec))
+    ++r.open_fds;
+  if (r.open_fds > 0) --r.open_fds;  // the directory iterator's own descriptor
+  return r;
+}
+
+std::string describe(const ProcessResources& r) {
+  std::ostringstream s;
+  s << "after " << r.frames << " frames RSS " << std::fixed << std::setprecision(1) << r.rss_mb << " MB, "
+    << r.open_fds << " fds, " << r.threads << " threads";
+  return s.str();
+}
+
+}  // namespace rgbdo

@@ -1,0 +1,48 @@
+# Soak: the virtual sensor plays the bundled recording LOOPS times as fast as it can decode it
+# (40 x LOOPS frames), the whole program reads it live. Asserted, independent of the machine's
+# speed or load: every frame delivered is processed or counted (skipped / dropped), resident
+# memory does not grow after warm-up by more than MAX_GROWTH_MB, no descriptor or thread is
+# leaked, and (in a sanitised build) nothing leaks or errs.
+# The 100,000-frame version of README "Reliability" is the same command with loop=2500.
+string(REPLACE "|" ";" EMULATOR "${EMULATOR}")
+execute_process(
+  COMMAND ${EMULATOR} ${EXE} "--source" "openni://rgbdo-virtual:${DATA}?rate=1000&loop=${LOOPS}" --config ${CONFIG} -q
+          --set sensor.reconnect_timeout_s=0
+  RESULT_VARIABLE rc OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "rgbd-odometry exited ${rc}:\n${stdout}\n${stderr}")
+endif()
+math(EXPR delivered "40 * ${LOOPS}")
+if(NOT stdout MATCHES "frames: ([0-9]+) processed, ([0-9]+) skipped \\(processing behind\\), ([0-9]+) dropped by the sensor")
+  message(FATAL_ERROR "no frame accounting in the summary:\n${stdout}")
+endif()
+math(EXPR accounted "${CMAKE_MATCH_1} + ${CMAKE_MATCH_2} + ${CMAKE_MATCH_3}")
+if(NOT accounted EQUAL delivered)
+  message(FATAL_ERROR "${delivered} frames delivered, ${accounted} accounted for:\n${stdout}")
+endif()
+if(NOT stdout MATCHES "resources: after 200 frames RSS ([0-9.]+) MB, ([0-9]+) fds, ([0-9]+) threads; after ([0-9]+) frames RSS ([0-9.]+) MB, ([0-9]+) fds, ([0-9]+) threads")
+  message(FATAL_ERROR "no resource line in the summary:\n${stdout}")
+endif()
+set(rss_warm ${CMAKE_MATCH_1})
+set(fds_warm ${CMAKE_MATCH_2})
+set(threads_warm ${CMAKE_MATCH_3})
+set(frames_end ${CMAKE_MATCH_4})
+set(rss_end ${CMAKE_MATCH_5})
+set(fds_end ${CMAKE_MATCH_6})
+set(threads_end ${CMAKE_MATCH_7})
+message(STATUS "${delivered} frames: RSS ${rss_warm} MB after 200, ${rss_end} MB after ${frames_end}; fds ${fds_warm} -> ${fds_end}; threads ${threads_warm} -> ${threads_end}")
+math(EXPR late "${delivered} / 2")
+if(frames_end LESS late)
+  message(FATAL_ERROR "the last resource sample is from frame ${frames_end} of ${delivered}")
+endif()
+if(NOT fds_end EQUAL fds_warm OR NOT threads_end EQUAL threads_warm)
+  message(FATAL_ERROR "descriptors ${fds_warm} -> ${fds_end}, threads ${threads_warm} -> ${threads_end}")
+endif()
+# CMake has no floating point: compare in tenths of a MB.
+string(REPLACE "." "" rss_warm_tenths ${rss_warm})
+string(REPLACE "." "" rss_end_tenths ${rss_end})
+math(EXPR growth "${rss_end_tenths} - ${rss_warm_tenths}")
+math(EXPR allowed "${MAX_GROWTH_MB} * 10")
+if(growth GREATER allowed)
+  message(FATAL_ERROR "resident memory grew by ${growth}/10 MB after warm-up (allowed ${MAX_GROWTH_MB} MB)")
+endif()
