@@ -43,10 +43,6 @@ std::vector<std::int64_t> map_all(DeviceClock& clock, const std::vector<Capture>
   return mapped;
 }
 
-// Steps down to a sooner arrival: the record lows of the transport delay (a few dozen in an
-// hour of an exponential tail) and, while the rate is not yet known, a drifting clock's.
-constexpr int kMaxSteps = 40;  // measured 2-22 in an hour, 7 in ten minutes
-
 class DriftingCrystal : public ::testing::TestWithParam<double> {};
 
 TEST_P(DriftingCrystal, CaptureTimesStayOnTheHostClockForAnHourWithIntervalsIntact) {
@@ -55,15 +51,13 @@ TEST_P(DriftingCrystal, CaptureTimesStayOnTheHostClockForAnHourWithIntervalsInta
   DeviceClock clock;
   const std::vector<std::int64_t> mapped = map_all(clock, frames);
 
-  // The mapping keeps two constant biases: the least transport delay (capture times are held
-  // at or before the arrivals, so it settles on the lower envelope), and the drift of the
-  // first two windows (10 s), before the rate is known. Beyond them it must follow the host
-  // clock, to 0.3 ms, for the whole hour.
-  std::int64_t least_delay = frames[0].arrival_host_ns - frames[0].true_host_ns;
-  for (const auto& f : frames) least_delay = std::min(least_delay, f.arrival_host_ns - f.true_host_ns);
+  // The mapping keeps two constant biases: the first frame's transport delay, and the drift
+  // of the first two windows (10 s), before the rate is known. Beyond them it must follow the
+  // host clock, to 0.3 ms, for the whole hour.
+  const std::int64_t bias = frames[0].arrival_host_ns - frames[0].true_host_ns;
   double worst_ms = 0;
   for (size_t i = 30 * 60; i < frames.size(); ++i)
-    worst_ms = std::max(worst_ms, std::fabs(static_cast<double>(mapped[i] - frames[i].true_host_ns - least_delay)) * 1e-6);
+    worst_ms = std::max(worst_ms, std::fabs(static_cast<double>(mapped[i] - frames[i].true_host_ns - bias)) * 1e-6);
   const double before_the_rate_is_known_ms = std::fabs(drift) * 2 * 5.0 * 1e3;
   EXPECT_LT(worst_ms, before_the_rate_is_known_ms + 0.3) << "drift " << drift;
   // The obvious alternative, one offset for ever, is off by the drift times an hour.
@@ -72,18 +66,12 @@ TEST_P(DriftingCrystal, CaptureTimesStayOnTheHostClockForAnHourWithIntervalsInta
       std::fabs(static_cast<double>((last.device_ns - frames[0].device_ns) - (last.true_host_ns - frames[0].true_host_ns))) * 1e-6;
   EXPECT_GT(fixed_offset_error_ms, 50 * worst_ms);
 
-  // No capture after its arrival; intervals the device's, changed by the skew only (ppm) but
-  // for the few steps down to a sooner arrival.
-  int steps = 0;
-  for (size_t i = 0; i < frames.size(); ++i) ASSERT_LE(mapped[i], frames[i].arrival_host_ns) << "frame " << i;
+  // Intervals: the device's, changed by the skew only (ppm), never by a jump.
   for (size_t i = 1; i < frames.size(); ++i) {
     const double device_dt = static_cast<double>(frames[i].device_ns - frames[i - 1].device_ns);
     const double host_dt = static_cast<double>(mapped[i] - mapped[i - 1]);
-    if (std::fabs(host_dt - device_dt) <= device_dt * 2 * std::fabs(drift) + 2.0) continue;
-    ASSERT_LT(host_dt, device_dt) << "frame " << i;  // only ever a step down
-    ++steps;
+    ASSERT_NEAR(host_dt, device_dt, device_dt * 2 * std::fabs(drift) + 2.0) << "frame " << i;
   }
-  EXPECT_LE(steps, kMaxSteps) << "drift " << drift;
   EXPECT_NEAR(clock.skew(), -drift / (1 + drift), 3e-6);
   EXPECT_FALSE(clock.implausible_skew());
 }
@@ -94,25 +82,19 @@ TEST(DeviceClock, AnExactCrystalKeepsTheDeviceIntervals) {
   const auto frames = simulate(600, 0, 11);
   DeviceClock clock;
   const std::vector<std::int64_t> mapped = map_all(clock, frames);
-  int steps = 0;
   for (size_t i = 1; i < frames.size(); ++i) {
     const double device_dt = static_cast<double>(frames[i].device_ns - frames[i - 1].device_ns);
-    const double host_dt = static_cast<double>(mapped[i] - mapped[i - 1]);
-    if (std::fabs(host_dt - device_dt) <= 100.0) continue;  // 0.1 us of 33 ms
-    EXPECT_LT(host_dt, device_dt) << "frame " << i;
-    ++steps;
+    EXPECT_NEAR(static_cast<double>(mapped[i] - mapped[i - 1]), device_dt, 100.0) << "frame " << i;  // 0.1 us of 33 ms
   }
-  EXPECT_LE(steps, kMaxSteps);
   EXPECT_LT(std::fabs(clock.skew()), 2e-6);
 }
 
 TEST(DeviceClock, AClockRunningAtAnotherSpeedIsNotFollowedAndSaysSo) {
   // The virtual sensor at rate=2: recorded seconds pass twice as fast as host seconds.
-  // Its times run ahead of the arrivals by design; after a second they are not held back.
   const auto frames = simulate(60, 1.0, 3);
   DeviceClock clock;
   const std::vector<std::int64_t> mapped = map_all(clock, frames);
-  for (size_t i = 16; i < frames.size(); ++i)  // 16 frames = 1 s of this clock
+  for (size_t i = 1; i < frames.size(); ++i)
     EXPECT_EQ(mapped[i] - mapped[i - 1], frames[i].device_ns - frames[i - 1].device_ns) << "frame " << i;
   EXPECT_TRUE(clock.implausible_skew());
   EXPECT_EQ(clock.skew(), 0.0);
@@ -137,25 +119,6 @@ TEST(DeviceClock, TheFirstFrameIsMappedToItsArrival) {
   DeviceClock clock;
   EXPECT_EQ(clock.to_host(42'000, 7'000'000'000), 7'000'000'000);
   EXPECT_EQ(clock.to_host(42'000 + 33'000'000, 7'050'000'000), 7'033'000'000);  // device interval, not arrival
-  EXPECT_EQ(clock.lowered(), 0);
-}
-
-TEST(DeviceClock, AFirstFrameDelayedByStartUpDoesNotPutLaterCapturesInTheFuture) {
-  // The live replay's case: the first frame arrives 120 ms after its capture (start-up), the
-  // rest 3 ms after theirs. Mapped from the first arrival alone, every later capture time
-  // would lie 117 ms after its own arrival.
-  DeviceClock clock;
-  const std::int64_t device0 = 1'000'000, host0 = 9'000'000'000;
-  EXPECT_EQ(clock.to_host(device0, host0 + 120'000'000), host0 + 120'000'000);
-  for (int k = 1; k < 300; ++k) {
-    const std::int64_t device = device0 + k * 33'333'333LL, arrival = host0 + k * 33'333'333LL + 3'000'000;
-    const std::int64_t mapped = clock.to_host(device, arrival);
-    ASSERT_LE(mapped, arrival) << "frame " << k;
-    if (k >= 2) {
-      ASSERT_EQ(mapped, arrival) << "frame " << k;  // the least delay, held since frame 1
-    }
-  }
-  EXPECT_EQ(clock.lowered(), 1);
 }
 
 }  // namespace

@@ -120,14 +120,17 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   // pipeline thread runs: a long run's summary shows whether memory, descriptors or threads grow.
   constexpr std::uint64_t kWarmUpFrames = 200, kResourcePeriod = 50;
   std::uint64_t output_frames = 0;
-  std::optional<ProcessResources> warm, latest;
+  std::optional<ProcessResources> warm, latest, previous;  // previous: at least a period before the end
   std::string output_error;
   // Runs on the pipeline's output thread, one frame at a time, in capture order.
   const auto on_output = [&](const PairOutput& item) {
     if (!output_error.empty()) return;
     ++output_frames;
     if (output_frames == kWarmUpFrames) warm = process_resources(output_frames);
-    if (output_frames > kWarmUpFrames && output_frames % kResourcePeriod == 0) latest = process_resources(output_frames);
+    if (output_frames > kWarmUpFrames && output_frames % kResourcePeriod == 0) {
+      previous = latest;  // the last sample may fall while the source's threads wind down
+      latest = process_resources(output_frames);
+    }
     try {
       if (!item.frame_problem.empty()) err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns) << ": " << item.frame_problem << "\n";
       if (!item.has_pair) {
@@ -203,7 +206,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, rematched_pairs, run);
-  if (warm && latest) out << "  resources: " << describe(*warm) << "; " << describe(*latest) << "\n";
+  if (warm && previous) out << "  resources: " << describe(*warm) << "; " << describe(*previous) << "\n";
   if (flight) {
     const LinkStats st = flight->stats();
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down

@@ -10,12 +10,6 @@
 // mapping stays continuous (re-anchored at every change of rate): intervals change by the skew,
 // parts per million, never by a jump.
 //
-// A capture time is never later than the frame's arrival: the mapping starts at the first
-// frame's arrival, and whenever a frame arrives sooner than the mapping puts its capture (the
-// first frame waited longer in transport than this one), the mapping steps down to that
-// arrival. It settles on the least transport delay within the first frames; before, a live
-// replay's first frame, delayed by start-up, put every later capture time in the future.
-//
 // A rate further from the host's than a crystal can be (over 1000 ppm) is not followed: it is
 // a device clock that runs at another speed on purpose (the virtual sensor at rate != 1 keeps
 // the recording's times), reported by implausible_skew(). A recording played back is never
@@ -29,10 +23,6 @@ class DeviceClock {
  public:
   static constexpr std::int64_t kWindowNs = 5'000'000'000;  // of device time, per envelope point
   static constexpr double kMaxSkew = 1e-3;                  // beyond this, not a crystal's error
-  // A clock this far from the host's over at least this much device time runs at another
-  // speed on purpose: its capture times are not held back to the arrivals.
-  static constexpr double kOtherSpeed = 0.1;
-  static constexpr std::int64_t kOtherSpeedBaselineNs = 1'000'000'000;
   // Each window's weight in the fit decays by this per window (~4 min of memory): a crystal's
   // rate wanders with its temperature.
   static constexpr double kForget = 0.98;
@@ -43,7 +33,6 @@ class DeviceClock {
   std::int64_t to_host(std::int64_t device_ns, std::int64_t arrival_host_ns);
 
   double skew() const { return skew_; }  // host seconds per device second, minus 1
-  int lowered() const { return lowered_; }  // steps down to an arrival so far
   bool implausible_skew() const { return implausible_; }
 
  private:
@@ -51,7 +40,6 @@ class DeviceClock {
   std::int64_t anchor_device_ns_ = 0, anchor_host_ns_ = 0;
   double skew_ = 0;
   bool implausible_ = false;
-  int lowered_ = 0;
   // The current window: its start and its least (arrival - device) so far.
   std::int64_t window_start_ns_ = 0, window_min_ns_ = 0, window_min_at_ns_ = 0;
   // Weighted least squares of the windows' minima against device time, relative to the first frame.
