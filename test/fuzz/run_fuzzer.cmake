@@ -1,6 +1,6 @@
 # MODE=replay: run FUZZER once over every file in INPUTS (a missing directory: nothing to do).
-# MODE=fuzz: copy INPUTS to WORK and fuzz from it for SECONDS (single process, so that a
-# finding names its input and the run stays within its time on a shared 2-core machine).
+# MODE=fuzz: copy INPUTS to WORK and fuzz from it for RUNS inputs with seed 1 (one process:
+# the same inputs on every machine, and a finding names its input).
 if(MODE STREQUAL "replay")
   file(GLOB inputs ${INPUTS}/*)
   if(NOT inputs)
@@ -17,7 +17,7 @@ else()
   endif()
   file(COPY ${seeds} DESTINATION ${WORK}/corpus)
   execute_process(
-    COMMAND ${FUZZER} ${WORK}/corpus -max_total_time=${SECONDS} -timeout=30 -rss_limit_mb=2048
+    COMMAND ${FUZZER} ${WORK}/corpus -runs=${RUNS} -seed=1 -timeout=60 -rss_limit_mb=2048
             -artifact_prefix=${WORK}/artifacts/ -print_final_stats=1
     RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 endif()
