@@ -73,6 +73,13 @@ void PerturbationCovariance::reserve(int points) {
   paper_prev_.reserve(static_cast<size_t>(points));
   paper_curr_.reserve(static_cast<size_t>(points));
   moved_.reserve(static_cast<size_t>(points));
+  cell_.reserve(static_cast<size_t>(points));
+  // A pair reaching a cell no earlier pair reached must not allocate: room for kMaxCells
+  // (the default 160-px cells of a 640 x 480 image are 12).
+  const auto P = static_cast<size_t>(padded_perturbations_);
+  cell_weight_.reserve(kMaxCells * P);
+  cell_total_.reserve(kMaxCells);
+  perturbation_weight_.reserve(P);
 }
 
 bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,

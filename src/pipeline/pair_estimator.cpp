@@ -138,7 +138,7 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
       const Eigen::Vector2d& u = curr.geometry.pixel[j];
       const int column = std::clamp(static_cast<int>(u.x() / cell_px), 0, cell_columns - 1);
       const int row = std::clamp(static_cast<int>(u.y() / cell_px), 0, 255);
-      inlier_cells_.push_back(static_cast<std::uint16_t>(row * cell_columns + column));
+      inlier_cells_.push_back(static_cast<std::uint16_t>(std::min(row * cell_columns + column, 65535)));
     }
   }
 }

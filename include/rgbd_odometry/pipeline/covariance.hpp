@@ -83,6 +83,7 @@ class PerturbationCovariance {
   std::vector<float> sums_;  // 15 arrays of padded_perturbations_
   std::vector<Vector6d> samples_;
   std::vector<PointNoise> paper_prev_, paper_curr_;
+  static constexpr size_t kMaxCells = 1024;  // reserved once; more cells are still handled
   std::vector<std::uint16_t> cell_;
   std::vector<float> cell_weight_;                       // [cell * padded perturbations + p]
   std::vector<double> cell_total_, perturbation_weight_;  // weight per cell; per perturbation
