@@ -104,9 +104,9 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
       (!cells.empty() && cells.size() != n))
     return false;
   const double c = config_.depth_noise_coeff;
-  last_variance_factor_ =
+  const double s0_squared =
       config_.residual_variance_factor ? variance_factor(prev, curr, prev_noise, curr_noise, T_prev_curr) : 1.0;
-  const double noise_scale = std::sqrt(last_variance_factor_);
+  const double noise_scale = std::sqrt(s0_squared);
 
   // Centre both clouds on their weighted centroids (in double) so that the float sums hold
   // small numbers and the per-perturbation cross-covariance loses no precision.

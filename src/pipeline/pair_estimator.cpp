@@ -56,6 +56,7 @@ void predict_positions(const KeypointGeometry& prev, const MotionPrior& prior, d
 
 PairEstimator::PairEstimator(const Config& config)
     : config_(config),
+      paper_noise_(config.covariance.model == "paper"),
       noise_(sensor_noise(config)),
       matcher_(config.matching.ratio),
       ransac_(config.ransac, sensor_noise(config), config.features.max_features),
@@ -204,7 +205,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   }
   Matrix6d cov;
   bool cov_ok;
-  if (config_.covariance.model == "paper") {
+  if (paper_noise_) {
     cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
   } else {
     describe_inlier_noise(prev, curr, dt_s);

@@ -60,8 +60,7 @@ class PerturbationCovariance {
   // The N parameter vectors of the last estimate (tests, diagnostics).
   const std::vector<Vector6d>& samples() const { return samples_; }
   const char* kernel_name() const { return kernels_.name; }
-  // The last estimate's s0^2 (1 without residual_variance_factor) and timing term.
-  double last_variance_factor() const { return last_variance_factor_; }
+  // The last estimate's timing term (tests).
   const Matrix6d& last_timing_covariance() const { return last_timing_; }
 
   // s0^2 of the fit (>= 1), as described above.
@@ -88,7 +87,6 @@ class PerturbationCovariance {
   std::vector<float> cell_weight_;                       // [cell * padded perturbations + p]
   std::vector<double> cell_total_, perturbation_weight_;  // weight per cell; per perturbation
   std::vector<Eigen::Vector3d> moved_;  // one frame's points with their depths moved
-  double last_variance_factor_ = 1;
   Matrix6d last_timing_ = Matrix6d::Zero();
 };
 

@@ -41,6 +41,7 @@ class PairEstimator {
   void describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s);
 
   Config config_;
+  bool paper_noise_;  // covariance.model "paper", decided once
   SensorNoise noise_;
   SymmetricMatcher matcher_;
   RigidRansac ransac_;
