@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <map>
 #include <thread>
 
@@ -32,7 +33,7 @@ std::string virtual_uri(const std::string& faults) {
 Config live_config(int processing_threads) {
   Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   c.runtime.processing_threads = processing_threads;
-  c.sensor.frame_timeout_ms = 1000;
+  c.sensor.frame_timeout_ms = 3000;  // far above the 600 ms stall below, however loaded the machine
   c.sensor.pairing_wait_ms = static_cast<int>(100 / kRate);  // device time runs slower below rate 1
   c.sensor.reconnect_interval_ms = 100;
   c.sensor.reconnect_timeout_s = 2.0;  // the recording's end unplugs the device for good
@@ -44,6 +45,7 @@ struct LiveRun {
   std::vector<std::string> messages;
   RealtimeStats stats;
   double seconds = 0;
+  double stop_requested_s = -1;  // when stop_when first held (from the start of the run)
   std::vector<const PairResult*> pairs() const {
     std::vector<const PairResult*> p;
     for (const auto& o : outputs)
@@ -57,19 +59,40 @@ struct LiveRun {
   }
 };
 
-LiveRun run_live(const Config& config, const std::string& uri, const std::atomic<bool>& stop) {
+// The live run until the recording's end, or until stop_when(run so far) holds: it is asked
+// on the output thread after every output and message, so a test stops on an event (a message,
+// a count of pairs), never at a time a loaded machine may not have reached.
+LiveRun run_live(const Config& config, const std::string& uri,
+                 const std::function<bool(const LiveRun&)>& stop_when) {
   OpenNiOptions o;
   o.uri = uri;
   o.frame_timeout_ms = config.sensor.frame_timeout_ms;
   o.pairing_wait_ms = config.sensor.pairing_wait_ms;
   OpenNiFeed feed(o, 0);
   LiveRun run;
-  RealtimePipeline pipeline(
-      config, feed, [&](const PairOutput& out) { run.outputs.push_back(out); },
-      [&](const std::string& m) { run.messages.push_back(m); });
+  std::atomic<bool> stop{false};
   const auto start = std::chrono::steady_clock::now();
+  const auto seconds_since_start = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  const auto check_stop = [&] {
+    if (!stop && stop_when(run)) {
+      run.stop_requested_s = seconds_since_start();
+      stop = true;
+    }
+  };
+  RealtimePipeline pipeline(
+      config, feed,
+      [&](const PairOutput& out) {
+        run.outputs.push_back(out);
+        check_stop();
+      },
+      [&](const std::string& m) {
+        run.messages.push_back(m);
+        check_stop();
+      });
   run.stats = pipeline.run(stop);
-  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.seconds = seconds_since_start();
   return run;
 }
 
@@ -81,8 +104,7 @@ std::uint64_t accounted(const RealtimeStats& s) {
 }
 
 LiveRun run_live(const Config& config, const std::string& uri) {
-  const std::atomic<bool> never{false};
-  return run_live(config, uri, never);
+  return run_live(config, uri, [](const LiveRun&) { return false; });
 }
 
 // Replays, from the recording on disk, exactly the frame pairs the live run formed, in the same
@@ -183,11 +205,23 @@ TEST(RealtimeFaults, AStallShorterThanTheTimeoutLosesNothing) {
 
 TEST(RealtimeFaults, AnUnpluggedSensorIsReopenedAndThePairAcrossTheGapIsFlagged) {
   const Config config = live_config(2);
-  // Away for 6 frame periods: it returns with frames of the recording still to come.
+  // Away for 6 frame periods; the recording loops on, so there are frames to come after the
+  // re-open however long a loaded machine takes to make it. The run is stopped once ten pairs
+  // after the gap are out: an event, not a time.
   const int away_ms = static_cast<int>(6 * kFramePeriodS * 1000);
-  const LiveRun live = run_live(config, virtual_uri("&disconnect=15&reconnect=" + std::to_string(away_ms)));
-  EXPECT_EQ(live.stats.sensor_losses, 2);  // the unplug, then the recording's end
+  constexpr int kPairsAfterTheGap = 10;
+  const auto pairs_after_the_gap = [](const LiveRun& run) {
+    int after = -1;  // none until the gap
+    for (const auto& o : run.outputs)
+      if (o.has_pair && (o.result.status == Status::SensorLost || after >= 0)) ++after;
+    return after;
+  };
+  const LiveRun live =
+      run_live(config, virtual_uri("&loop=1000&disconnect=15&reconnect=" + std::to_string(away_ms)),
+               [&](const LiveRun& run) { return pairs_after_the_gap(run) >= kPairsAfterTheGap; });
+  EXPECT_EQ(live.stats.sensor_losses, 1);  // the unplug; the stop came before the recording's end
   EXPECT_EQ(live.stats.reopens, 1);
+  EXPECT_TRUE(live.said("sensor lost: the sensor was disconnected"));
   EXPECT_TRUE(live.said("sensor back"));
   int lost = 0;
   bool after_gap = false;
@@ -203,25 +237,24 @@ TEST(RealtimeFaults, AnUnpluggedSensorIsReopenedAndThePairAcrossTheGapIsFlagged)
     EXPECT_EQ(p->status, Status::Ok) << "after the gap too: " << after_gap;
   }
   EXPECT_EQ(lost, 1);
-  // Frames on both sides of the gap were captured: 15 before, some after (under emulation some
-  // are skipped, which is counted, not lost).
-  EXPECT_GE(accounted(live.stats), 20u);
-  EXPECT_LE(accounted(live.stats), static_cast<std::uint64_t>(kFrames - 6));
+  EXPECT_GE(pairs_after_the_gap(live), kPairsAfterTheGap);
+  // The 15 frames before the gap, each processed or counted, and those after it.
+  EXPECT_GE(accounted(live.stats), static_cast<std::uint64_t>(15 + kPairsAfterTheGap));
   EXPECT_EQ(live.pairs().size(), live.stats.frames - 1);
 }
 
 TEST(RealtimeFaults, AStopRequestEndsARunWaitingForALostSensorWithinASecond) {
   Config config = live_config(2);
   config.sensor.reconnect_timeout_s = -1;  // would wait for ever
-  std::atomic<bool> stop{false};
-  std::thread stopper([&] {
-    std::this_thread::sleep_for(std::chrono::duration<double>(12 * kFramePeriodS + 0.3));
-    stop = true;
+  // Stopped when the loss is reported, i.e. while the run waits for the sensor to come back.
+  const LiveRun live = run_live(config, virtual_uri("&disconnect=8"), [](const LiveRun& run) {
+    return run.said("sensor lost");
   });
-  const LiveRun live = run_live(config, virtual_uri("&disconnect=8"), stop);
-  stopper.join();
-  const double after_stop = live.seconds - std::chrono::duration<double>(12 * kFramePeriodS + 0.3).count();
-  EXPECT_LT(after_stop, 1.0);  // the requirement: SIGINT/SIGTERM end the program within a second
+  ASSERT_GE(live.stop_requested_s, 0.0) << "the loss was never reported";
+  // The requirement: SIGINT/SIGTERM end the program within a second. What remains after the
+  // request is a wait's poll, finishing the frames in hand and joining the threads: tens of
+  // milliseconds natively, under a second with every core busy under ThreadSanitizer.
+  EXPECT_LT(live.seconds - live.stop_requested_s, 1.0);
   EXPECT_EQ(accounted(live.stats), 8u);
   EXPECT_EQ(live.pairs().size(), live.stats.frames - 1);  // every frame in hand was finished and output
 }
