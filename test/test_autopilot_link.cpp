@@ -196,13 +196,13 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   EXPECT_GT(json_number(result, "garbageBytes"), 0) << "the link was unkind: " << result;
   EXPECT_GT(json_number(result, "corruptFrames"), 0) << result;
   // Its converged offset carries our capture times onto its clock: each ODOMETRY stamp lands
-  // near its arrival, within the device clock's mapping error (sensor/device_clock.cpp: it can
-  // put a stamp tens of ms late on a loaded machine) and the pipeline's latency. Seconds off
-  // would mean another clock (the dataset's, or an offset gone wrong).
+  // before its arrival (a capture time is never after the frame reached us: the device
+  // clock's lead, sensor/device_clock.hpp), to the offset's error (< 1 ms, asserted above),
+  // and at most the pipeline's latency earlier. Seconds off would mean another clock.
   const std::regex latency("\"odometryLatencyUs\": \\{\\s*\"min\": (-?[0-9.e+-]+),\\s*\"max\": (-?[0-9.e+-]+)");
   std::smatch m;
   ASSERT_TRUE(std::regex_search(result, m, latency)) << result;
-  EXPECT_GT(std::stod(m[1]), -1e6) << "a stamp long after its arrival: " << result;
+  EXPECT_GT(std::stod(m[1]), -1000) << "a stamp after its arrival: " << result;
   EXPECT_LT(std::stod(m[2]), 5e6) << result;
   std::cout << "[ " << name << " ] PX4 estimator: " << json_number(result, "sequence") << " samples, offset error "
             << error_us << " us; ODOMETRY capture-to-arrival " << std::stod(m[1]) / 1000 << ".."

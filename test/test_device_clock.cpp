@@ -3,6 +3,7 @@
 // that runs at another speed on purpose (the virtual sensor at rate != 1).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -119,6 +120,49 @@ TEST(DeviceClock, TheFirstFrameIsMappedToItsArrival) {
   DeviceClock clock;
   EXPECT_EQ(clock.to_host(42'000, 7'000'000'000), 7'000'000'000);
   EXPECT_EQ(clock.to_host(42'000 + 33'000'000, 7'050'000'000), 7'033'000'000);  // device interval, not arrival
+}
+
+TEST(DeviceClock, AFirstFrameReadLateLeavesNoCaptureTimeAfterItsArrival) {
+  // The reader began 180 ms after the sensor: the first frame is read that late, the next few
+  // come out of the driver's queue in a burst, then frames arrive 2-3 ms after capture.
+  auto frames = simulate(60, 0, 13);
+  for (size_t k = 0; k < 6; ++k)
+    frames[k].arrival_host_ns = std::max(frames[k].arrival_host_ns, frames[0].true_host_ns + 180'000'000 +
+                                                                        static_cast<std::int64_t>(k) * 100'000);
+  DeviceClock clock;
+  std::vector<std::int64_t> timeline, lead;
+  for (const auto& f : frames) {
+    timeline.push_back(clock.to_host(f.device_ns, f.arrival_host_ns));
+    lead.push_back(clock.lead_ns());
+  }
+  // The timeline anchored at the late first arrival runs ~180 ms ahead; the lead takes that off.
+  EXPECT_NEAR(static_cast<double>(clock.lead_ns()), 178e6, 2e6);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const std::int64_t host_capture = timeline[i] - lead[i];
+    EXPECT_LE(host_capture, frames[i].arrival_host_ns) << "frame " << i;
+    if (i > 0) {
+      EXPECT_GE(lead[i], lead[i - 1]);  // a step down of the stamps, never up
+      // The intervals stay the device's (to the fitted skew's ppm), whatever the lead did in between.
+      EXPECT_NEAR(static_cast<double>(timeline[i] - timeline[i - 1]),
+                  static_cast<double>(frames[i].device_ns - frames[i - 1].device_ns), 100.0)
+          << "frame " << i;
+    }
+    // Never before the capture plus the least transport delay (2 ms, to the skew fit's ns): the lead takes off only
+    // what a frame proved. After the burst, within the least delay seen so far, which closes
+    // in on those 2 ms as frames come.
+    EXPECT_GE(host_capture - frames[i].true_host_ns, 2'000'000 - 1'000) << "frame " << i;
+    const std::int64_t late_by = host_capture - frames[i].true_host_ns;
+    if (i >= 10) {
+      EXPECT_LT(late_by, 3'000'000) << "frame " << i;
+    }
+    if (i >= 300) {
+      EXPECT_LT(late_by, 2'100'000) << "frame " << i;
+    }
+  }
+  // Without the lead, nearly every frame after the first would be stamped after it arrived.
+  int ahead = 0;
+  for (size_t i = 0; i < frames.size(); ++i) ahead += timeline[i] > frames[i].arrival_host_ns ? 1 : 0;
+  EXPECT_GT(ahead, static_cast<int>(frames.size()) * 9 / 10);
 }
 
 }  // namespace

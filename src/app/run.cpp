@@ -132,9 +132,11 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
       latest = process_resources(output_frames);
     }
     try {
-      if (!item.frame_problem.empty()) err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns) << ": " << item.frame_problem << "\n";
+      if (!item.frame_problem.empty())
+        err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns - item.host_lead_ns) << ": "
+            << item.frame_problem << "\n";
       if (!item.has_pair) {
-        if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
+        if (trajectory) trajectory->write(item.t_frame_ns - item.host_lead_ns, integrator.pose());
         return;
       }
       const PairResult& r = item.result;
@@ -150,7 +152,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
       rematched_pairs += r.rematched ? 1 : 0;
       if (log) log->write(r);
       if (flight) flight->send_pair(r);
-      if (trajectory) trajectory->write(item.t_frame_ns, integrator.pose());
+      if (trajectory) trajectory->write(item.t_frame_ns - item.host_lead_ns, integrator.pose());
       evaluator.add(r, origin.inverse() * integrator.pose());
       ++pair_count;
       if (!options.quiet) {

@@ -15,7 +15,7 @@ FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
       backprojector_(config.camera, config.depth) {}
 
 void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
-  out.times = {frame.t_colour_ns, frame.t_depth_ns};
+  out.times = {frame.t_colour_ns, frame.t_depth_ns, frame.host_lead_ns};
   out.status = frame.status;
   out.problem = frame.problem;  // empty for good frames: no allocation
   out.features.keypoints.clear();

@@ -146,8 +146,11 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
 
 PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index) {
   PairResult r;
-  r.t_prev_ns = prev.times.t_colour_ns;
-  r.t_curr_ns = curr.times.t_colour_ns;
+  // Stamped on the host clock at the newer frame's capture, the interval the timeline's: a
+  // step of the host lead between the two frames (sensor/device_clock.hpp) moves the pair, it
+  // never stretches or shrinks the interval the motion is divided by.
+  r.t_curr_ns = curr.times.host_colour_ns();
+  r.t_prev_ns = r.t_curr_ns - (curr.times.t_colour_ns - prev.times.t_colour_ns);
   r.features_prev = static_cast<int>(prev.features.keypoints.size());
   r.features_curr = static_cast<int>(curr.features.keypoints.size());
   const auto fail = [&](Status s) {

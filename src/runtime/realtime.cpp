@@ -160,8 +160,8 @@ class Run {
         after_gap = true;
         continue;
       }
-      // A live frame's colour time is on the host steady clock already (sensor_openni.hpp).
-      slot.t_capture_host_ns = feed_.live() ? slot.frame.t_colour_ns : steady_now_ns();
+      // A live frame's timeline is the host steady clock, ahead by its lead (device_clock.hpp).
+      slot.t_capture_host_ns = feed_.live() ? slot.frame.t_colour_ns - slot.frame.host_lead_ns : steady_now_ns();
       slot.skipped_before = 0;
       slot.after_gap = after_gap;
       after_gap = false;
@@ -238,6 +238,7 @@ class Run {
     PairOutput out;
     out.t_frame_ns = curr.frame.times.t_colour_ns;
     out.t_depth_ns = curr.frame.times.t_depth_ns;
+    out.host_lead_ns = curr.frame.times.host_lead_ns;
     out.t_capture_host_ns = curr.t_capture_host_ns;
     out.skipped = curr.skipped_before;
     out.frame_problem = curr.frame.problem;
@@ -248,8 +249,9 @@ class Run {
         // Whatever moved while the sensor was away is unknown: a failed pair, and no motion
         // prior carried across the gap.
         PairResult& r = out.result;
-        r.t_prev_ns = prev.frame.times.t_colour_ns;
-        r.t_curr_ns = curr.frame.times.t_colour_ns;
+        // Two timelines (a re-plugged sensor's clock restarts): each frame on the host clock.
+        r.t_prev_ns = prev.frame.times.host_colour_ns();
+        r.t_curr_ns = curr.frame.times.host_colour_ns();
         r.status = Status::SensorLost;
         r.features_prev = static_cast<int>(prev.frame.features.keypoints.size());
         r.features_curr = static_cast<int>(curr.frame.features.keypoints.size());

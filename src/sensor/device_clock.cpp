@@ -1,10 +1,17 @@
 #include "rgbd_odometry/sensor/device_clock.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rgbdo {
 
 std::int64_t DeviceClock::to_host(std::int64_t device_ns, std::int64_t arrival_host_ns) {
+  const std::int64_t timeline_ns = map(device_ns, arrival_host_ns);
+  lead_ns_ = std::max(lead_ns_, timeline_ns - arrival_host_ns);
+  return timeline_ns;
+}
+
+std::int64_t DeviceClock::map(std::int64_t device_ns, std::int64_t arrival_host_ns) {
   const std::int64_t offset = arrival_host_ns - device_ns;  // delay + clock offset
   if (!started_) {
     started_ = true;

@@ -60,7 +60,8 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   double depth_m_per_unit = 0.001;
   // Device microseconds -> host nanoseconds: anchored at the first frame's arrival, then
   // following the crystal's rate against the host's (src/sensor/device_clock.cpp). Intervals stay the
-  // device's to parts per million (odometry divides by them), host times do not walk away.
+  // device's to parts per million (odometry divides by them), host times do not walk away, and
+  // the lead that start-up put into the anchor is taken off (RgbdFrame::host_lead_ns).
   DeviceClock clock;
   struct DepthSlot {
     std::int64_t t_ns = 0;
@@ -268,6 +269,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     colour_t = t;
   }
   out.t_colour_ns = colour_t;
+  out.host_lead_ns = s.clock.lead_ns();  // as proved by every frame read so far, this one's depth too
   out.status = Status::Ok;
   out.problem.clear();
   const Impl::DepthSlot* best = nullptr;

@@ -48,9 +48,12 @@ struct MotionPrior {
   Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
 };
 
+// A frame's capture times (RgbdFrame): intervals on the timeline, host time = t - host_lead_ns.
 struct FrameTimes {
   std::int64_t t_colour_ns = 0;
   std::int64_t t_depth_ns = 0;
+  std::int64_t host_lead_ns = 0;
+  std::int64_t host_colour_ns() const { return t_colour_ns - host_lead_ns; }
 };
 
 // 3-D correspondences of a frame pair; index k of prev/curr belong together.
