@@ -2,12 +2,14 @@
 # (40 x LOOPS frames), the whole program reads it live. Asserted, independent of the machine's
 # speed or load: every frame delivered is processed or counted (skipped / dropped), resident
 # memory does not grow after warm-up by more than MAX_GROWTH_MB, no descriptor or thread is
-# leaked, and (in a sanitised build) nothing leaks or errs.
+# leaked, the same frame pairs give the same motions pass after pass (nothing drifts), and
+# (in a sanitised build) nothing leaks or errs.
 # The 100,000-frame version of README "Reliability" is the same command with loop=2500.
 string(REPLACE "|" ";" EMULATOR "${EMULATOR}")
+file(REMOVE ${LOG} ${LOG}.1)
 execute_process(
   COMMAND ${EMULATOR} ${EXE} "--source" "openni://rgbdo-virtual:${DATA}?rate=1000&loop=${LOOPS}" --config ${CONFIG} -q
-          --set sensor.reconnect_timeout_s=0
+          --set sensor.reconnect_timeout_s=0 --log ${LOG}
   RESULT_VARIABLE rc OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "rgbd-odometry exited ${rc}:\n${stdout}\n${stderr}")
@@ -18,8 +20,33 @@ if(NOT stdout MATCHES "frames: ([0-9]+) processed, ([0-9]+) skipped \\(processin
 endif()
 set(processed ${CMAKE_MATCH_1})
 math(EXPR accounted "${CMAKE_MATCH_1} + ${CMAKE_MATCH_2} + ${CMAKE_MATCH_3}")
+math(EXPR not_processed "${CMAKE_MATCH_2} + ${CMAKE_MATCH_3}")
 if(NOT accounted EQUAL delivered)
   message(FATAL_ERROR "${delivered} frames delivered, ${accounted} accounted for:\n${stdout}")
+endif()
+
+# Repeated input, repeated results: after the first 200 pairs (the online stamp-jitter window
+# filled with the recording's intervals) a pass's 40 pairs give the motions (status, inliers,
+# translation, rotation) of the pass before, to the last printed digit. A frame skipped or
+# dropped makes other pairs: one across the gap and, through the motion window's prior, a
+# couple after it, each a new row; state that drifted would make every row new.
+file(STRINGS ${LOG} rows)
+list(LENGTH rows row_count)
+set(motions "")
+set(index 0)
+foreach(row IN LISTS rows)
+  math(EXPR index "${index} + 1")
+  if(index GREATER 201 AND row MATCHES "^[^,]*,[^,]*,([^,]*,[^,]*,[^,]*,[^,]*,[^,]*,[^,]*,[^,]*,[^,]*,[^,]*),")
+    list(APPEND motions "${CMAKE_MATCH_1}")
+  endif()
+endforeach()
+list(LENGTH motions compared)
+list(REMOVE_DUPLICATES motions)
+list(LENGTH motions distinct)
+math(EXPR distinct_allowed "40 + 2 + 4 * ${not_processed}")
+message(STATUS "${compared} pairs after the first 200: ${distinct} distinct motions (one pass: 40; allowed ${distinct_allowed} with ${not_processed} frames not processed)")
+if(distinct GREATER distinct_allowed)
+  message(FATAL_ERROR "repeated input gave ${distinct} distinct motions over ${compared} pairs (one pass has 40 pairs)")
 endif()
 if(NOT stdout MATCHES "resources: ")
   # Too few frames came out for a sample after warm-up (under qemu or a sanitizer the reader

@@ -133,7 +133,7 @@ TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {
     const long ea = extract.allocations(), eb = extract.bytes();
 
     const Counter pair;
-    const PairResult r = estimator.estimate(prev, curr, i);
+    const PairResult r = estimator.estimate(prev, curr);
     const long pa = pair.allocations();
 
     const Counter integrate;

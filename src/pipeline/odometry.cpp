@@ -15,7 +15,7 @@ std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
   const double detect_ms = ms_since(start);
   std::optional<PairResult> result;
   if (have_prev_) {
-    result = estimator_.estimate(prev_, curr_, pair_index_++);
+    result = estimator_.estimate(prev_, curr_);
     result->times.detect_ms = detect_ms;
   }
   std::swap(prev_, curr_);  // swap, not copy: buffers are reused frame after frame

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "rgbd_odometry/core/clock.hpp"
@@ -26,6 +27,30 @@ MotionPrior motion_from(const Eigen::Isometry3d& T_prev_curr, double dt_s) {
 // the (index + 1)-th output of a splitmix64 generator started at the seed.
 std::uint64_t mix(std::uint64_t seed, std::uint64_t index) {
   return splitmix64_mix(seed + kSplitMix64Increment * (index + 1));
+}
+
+// A pair's random streams follow from what its two frames hold, not from where the pair falls
+// in a run: the same two frames give the same result whenever they come (a replay, a live run
+// that skipped other frames, the thousandth pass of a looped recording). Eight descriptor rows
+// of each frame, evenly spread, and the keypoint counts are plenty to tell frames apart.
+std::uint64_t content_key(const ProcessedFrame& prev, const ProcessedFrame& curr) {
+  std::uint64_t key = 0;
+  const auto absorb = [&key](std::uint64_t word) { key = splitmix64_mix(key ^ (word + kSplitMix64Increment)); };
+  for (const ProcessedFrame* f : {&prev, &curr}) {
+    const cv::Mat& d = f->features.descriptors;
+    absorb(static_cast<std::uint64_t>(f->features.keypoints.size()));
+    if (d.empty() || !d.isContinuous()) continue;
+    const size_t row_bytes = d.cols * d.elemSize();
+    for (int k = 0; k < 8; ++k) {
+      const std::uint8_t* row = d.ptr<std::uint8_t>(static_cast<int>(static_cast<std::int64_t>(d.rows - 1) * k / 7));
+      for (size_t b = 0; b + 8 <= row_bytes; b += 8) {
+        std::uint64_t word = 0;
+        std::memcpy(&word, row + b, 8);
+        absorb(word);
+      }
+    }
+  }
+  return key;
 }
 
 // Where each keypoint of the previous frame appears in the current one (normalised image
@@ -76,7 +101,7 @@ PairEstimator::PairEstimator(const Config& config)
 }
 
 Status PairEstimator::match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
-                                   double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_index, PairResult& r) {
+                                   double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_key, PairResult& r) {
   mark_cost_stage(CostStage::Match);
   auto t0 = Clock::now();
   if (window_prior != nullptr) {
@@ -98,7 +123,7 @@ Status PairEstimator::match_and_fit(const ProcessedFrame& prev, const ProcessedF
   if (r.point_pairs < config_.ransac.min_inliers) return Status::TooFewMatches;
 
   // Its own stream per pair (the covariance's is another), the same for a second attempt.
-  Rng ransac_rng(mix(config_.seed, 2 * pair_index));
+  Rng ransac_rng(mix(config_.seed, 2 * pair_key));
   mark_cost_stage(CostStage::Ransac);
   t0 = Clock::now();
   ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_);
@@ -144,7 +169,7 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
   }
 }
 
-PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index) {
+PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr) {
   PairResult r;
   // Stamped on the host clock at the newer frame's capture, the interval the timeline's: a
   // step of the host lead between the two frames (sensor/device_clock.hpp) moves the pair, it
@@ -163,6 +188,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (prev.status != Status::Ok) return fail(prev.status);
   const double dt_s = static_cast<double>(r.t_curr_ns - r.t_prev_ns) * 1e-9;
   stamp_jitter_.add(prev.times, curr.times);
+  const std::uint64_t pair_key = content_key(prev, curr);
 
   const CostStagesEnd stages_end;
   const bool compensate = config_.depth.compensate_timing && dt_s > 0;
@@ -170,15 +196,15 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const MotionPrior prior = last_motion_.value_or(MotionPrior{});
   const bool windowed = config_.matching.window_px > 0 && prev.features.descriptors.type() == CV_8UC1 &&
                         curr.features.descriptors.type() == CV_8UC1;
-  Status solved = match_and_fit(prev, curr, windowed ? &prior : nullptr, dt_s, compensate ? &prior : nullptr, pair_index, r);
+  Status solved = match_and_fit(prev, curr, windowed ? &prior : nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
   if (windowed && (solved != Status::Ok || fit_.inliers.size() < 2 * static_cast<size_t>(config_.ransac.min_inliers))) {
     // The prior was wrong (a jolt, a gap) or the scene is bare: the paper's search over all pairs.
     r.rematched = true;
-    solved = match_and_fit(prev, curr, nullptr, dt_s, compensate ? &prior : nullptr, pair_index, r);
+    solved = match_and_fit(prev, curr, nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
   }
   if (solved != Status::Ok) return fail(solved);
 
-  Rng covariance_rng(mix(config_.seed, 2 * pair_index + 1));
+  Rng covariance_rng(mix(config_.seed, 2 * pair_key + 1));
   Clock::time_point t0;  // each stage below reads the clock at its start
   if (compensate) {
     // Second pass: carry the depths to colour time with this pair's own velocity, which is

@@ -256,9 +256,8 @@ class Run {
         r.features_prev = static_cast<int>(prev.frame.features.keypoints.size());
         r.features_curr = static_cast<int>(curr.frame.features.keypoints.size());
         estimator_.forget_motion();
-        ++pair_index_;
       } else {
-        out.result = estimator_.estimate(prev.frame, curr.frame, pair_index_++);
+        out.result = estimator_.estimate(prev.frame, curr.frame);
       }
       out.result.times.detect_ms = curr.detect_ms;
     }
@@ -333,7 +332,6 @@ class Run {
   std::array<ProcessedSlot, kProcessedSlots> slots_;
   BoundedQueue<int, kProcessedSlots> free_, ready_;
   BoundedQueue<PairOutput, kOutputDepth> outputs_;
-  std::uint64_t pair_index_ = 0;
   std::atomic<bool> stopping_{false}, output_done_{false};
   std::mutex messages_mutex_;
   std::vector<std::string> messages_;

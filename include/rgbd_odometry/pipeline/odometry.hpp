@@ -26,7 +26,6 @@ class OdometryPipeline {
   PairEstimator estimator_;
   ProcessedFrame prev_, curr_;
   bool have_prev_ = false;
-  std::uint64_t pair_index_ = 0;
 };
 
 }  // namespace rgbdo

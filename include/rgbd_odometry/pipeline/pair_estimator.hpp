@@ -22,9 +22,9 @@ class PairEstimator {
  public:
   explicit PairEstimator(const Config& config);  // config must have passed validate()
 
-  // pair_index numbers the pairs of a run (it seeds the pair's random streams, so a replay
-  // reproduces every pair exactly).
-  [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr, std::uint64_t pair_index);
+  // The pair's random streams are seeded from the two frames' content and config.seed: the
+  // same two frames give the same result in any run, at any place in it.
+  [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
   void forget_motion() { last_motion_.reset(); }
@@ -34,7 +34,7 @@ class PairEstimator {
   // point pairs (depths carried to colour time with timing_prior, unless null) and RANSAC's
   // first fit into fit_; fills r's counts and adds to its times.
   Status match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
-                       double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_index, PairResult& r);
+                       double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_key, PairResult& r);
 
   // The noise and image cell of each inlier (inlier_prev_noise_, inlier_curr_noise_,
   // inlier_cells_) for the covariance.

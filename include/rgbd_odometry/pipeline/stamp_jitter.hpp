@@ -38,15 +38,15 @@ class StampJitter {
     }
     double stamp_variance() const {
       if (count < 4) return 0;
+      // Summed in sorted order, not the ring's: the same intervals give the same bits wherever
+      // the ring happens to start (a looped recording repeats its results exactly).
       std::array<double, kIntervals> sorted = v;
-      const auto end = sorted.begin() + count;
-      const auto mid = sorted.begin() + count / 2;
-      std::nth_element(sorted.begin(), mid, end);
-      const double median = *mid;
+      std::sort(sorted.begin(), sorted.begin() + count);
+      const double median = sorted[static_cast<size_t>(count / 2)];
       double sum = 0;
       int used = 0;
       for (int i = 0; i < count; ++i) {
-        const double d = v[static_cast<size_t>(i)] - median;
+        const double d = sorted[static_cast<size_t>(i)] - median;
         if (std::abs(d) > 0.5 * median) continue;
         sum += d * d;
         ++used;

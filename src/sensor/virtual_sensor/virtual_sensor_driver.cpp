@@ -270,8 +270,9 @@ class VirtualDevice : public oni::driver::DeviceBase {
     };
     double stalled_s = 0;
     int colour_index = 0, depth_index = 0;
-    // Each pass of a looped recording follows the last one a frame period later, on one clock.
-    const std::int64_t pass_ns = events.back().t_ns - t0_ns + 1'000'000'000 / kFps;
+    // Each pass of a looped recording follows the last one a frame period later, on one clock,
+    // shifted by whole microseconds (the timestamps' unit): every pass has the same intervals.
+    const std::int64_t pass_ns = (events.back().t_ns - t0_ns + 1'000'000'000 / kFps) / 1000 * 1000;
     for (int pass = 0; pass < options_.loops; ++pass) {
       for (const Event& e : events) {
         if (stop_) return;
