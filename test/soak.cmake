@@ -28,10 +28,10 @@ endif()
 # Repeated input, repeated results: after the first 200 pairs (the online stamp-jitter window
 # filled with the recording's intervals) a pass's 40 pairs give the motions (status, inliers,
 # translation, rotation) of the pass before, to the last printed digit. A frame skipped or
-# dropped makes other pairs: one across the gap and, through the motion window's prior, a
-# couple after it, each a new row; state that drifted would make every row new.
+# dropped makes other pairs: one across the gap and, through the motion window's prior, the
+# next few (measured with a CPU hog on each core: 75 new motions for 16 frames not processed),
+# each a new row. State that drifted would make every row new.
 file(STRINGS ${LOG} rows)
-list(LENGTH rows row_count)
 set(motions "")
 set(index 0)
 foreach(row IN LISTS rows)
@@ -43,11 +43,14 @@ endforeach()
 list(LENGTH motions compared)
 list(REMOVE_DUPLICATES motions)
 list(LENGTH motions distinct)
-math(EXPR distinct_allowed "40 + 2 + 4 * ${not_processed}")
+math(EXPR distinct_allowed "40 + 2 + 12 * ${not_processed}")
 message(STATUS "${compared} pairs after the first 200: ${distinct} distinct motions (one pass: 40; allowed ${distinct_allowed} with ${not_processed} frames not processed)")
-if(distinct GREATER distinct_allowed)
+if(distinct_allowed GREATER_EQUAL compared)
+  message(STATUS "too many frames skipped for a comparison of passes (an emulator or a sanitizer): not compared")
+elseif(distinct GREATER distinct_allowed)
   message(FATAL_ERROR "repeated input gave ${distinct} distinct motions over ${compared} pairs (one pass has 40 pairs)")
 endif()
+
 if(NOT stdout MATCHES "resources: ")
   # Too few frames came out for a sample after warm-up (under qemu or a sanitizer the reader
   # skips frames it cannot keep up with): the accounting above is what this run can prove.
@@ -57,17 +60,30 @@ if(NOT stdout MATCHES "resources: ")
   message(STATUS "${delivered} frames delivered, all accounted for; too few processed for a resource comparison")
   return()
 endif()
-if(NOT stdout MATCHES "resources: after 200 frames RSS ([0-9.]+) MB, ([0-9]+) fds, ([0-9]+) threads; after ([0-9]+) frames RSS ([0-9.]+) MB, ([0-9]+) fds, ([0-9]+) threads")
-  message(FATAL_ERROR "no resource line in the summary:\n${stdout}")
+# "resources: after 200 frames RSS X MB, F fds, T threads; [after H frames ...; ]after N frames ..."
+string(REGEX MATCH "resources: [^\n]*" resources "${stdout}")
+string(REGEX MATCHALL "after [0-9]+ frames RSS [0-9.]+ MB, [0-9]+ fds, [0-9]+ threads" samples "${resources}")
+list(LENGTH samples sample_count)
+if(sample_count LESS 2)
+  message(FATAL_ERROR "no warm-up and end samples in the summary:\n${stdout}")
 endif()
-set(rss_warm ${CMAKE_MATCH_1})
-set(fds_warm ${CMAKE_MATCH_2})
-set(threads_warm ${CMAKE_MATCH_3})
-set(frames_end ${CMAKE_MATCH_4})
-set(rss_end ${CMAKE_MATCH_5})
-set(fds_end ${CMAKE_MATCH_6})
-set(threads_end ${CMAKE_MATCH_7})
-message(STATUS "${delivered} frames: RSS ${rss_warm} MB after 200, ${rss_end} MB after ${frames_end}; fds ${fds_warm} -> ${fds_end}; threads ${threads_warm} -> ${threads_end}")
+foreach(which IN ITEMS warm half end)
+  # A run too short for a halfway sample (the sanitizers' 400 frames): the end stands in.
+  if(which STREQUAL "warm")
+    list(GET samples 0 sample)
+  elseif(which STREQUAL "half" AND sample_count GREATER 2)
+    list(GET samples 1 sample)
+  else()
+    list(GET samples -1 sample)
+  endif()
+  string(REGEX MATCH "after ([0-9]+) frames RSS ([0-9.]+) MB, ([0-9]+) fds, ([0-9]+) threads" _ "${sample}")
+  set(frames_${which} ${CMAKE_MATCH_1})
+  set(rss_${which} ${CMAKE_MATCH_2})
+  set(fds_${which} ${CMAKE_MATCH_3})
+  set(threads_${which} ${CMAKE_MATCH_4})
+  string(REPLACE "." "" rss_${which}_tenths ${CMAKE_MATCH_2})  # CMake has no floating point: tenths of a MB
+endforeach()
+message(STATUS "${delivered} frames: RSS ${rss_warm} MB after ${frames_warm}, ${rss_half} MB after ${frames_half}, ${rss_end} MB after ${frames_end}; fds ${fds_warm} -> ${fds_end}; threads ${threads_warm} -> ${threads_end}")
 math(EXPR late "${delivered} / 2")
 if(frames_end LESS late)
   message(FATAL_ERROR "the last resource sample is from frame ${frames_end} of ${delivered}")
@@ -78,11 +94,18 @@ math(EXPR fds_allowed "${fds_warm} + 2")
 if(fds_end GREATER fds_allowed OR NOT threads_end EQUAL threads_warm)
   message(FATAL_ERROR "descriptors ${fds_warm} -> ${fds_end}, threads ${threads_warm} -> ${threads_end}")
 endif()
-# CMake has no floating point: compare in tenths of a MB.
-string(REPLACE "." "" rss_warm_tenths ${rss_warm})
-string(REPLACE "." "" rss_end_tenths ${rss_end})
+# Memory settles in steps over the first thousands of frames (measured, sampling /proc every
+# 3 s with a CPU hog on each core: +2.4 MB by frame 500, +0.9 MB near frame 2,000, flat to
+# 5,000; 100,000 frames: +2.6 MB in all), so two bounds: after warm-up, MAX_GROWTH_MB in all;
+# from the halfway sample (a quarter to half of the run) to the end, MAX_LATE_GROWTH_MB,
+# which a leak of 150 bytes per frame exceeds over 10,000 frames.
 math(EXPR growth "${rss_end_tenths} - ${rss_warm_tenths}")
+math(EXPR late_growth "${rss_end_tenths} - ${rss_half_tenths}")
 math(EXPR allowed "${MAX_GROWTH_MB} * 10")
+math(EXPR late_allowed "${MAX_LATE_GROWTH_MB} * 10")
 if(growth GREATER allowed)
   message(FATAL_ERROR "resident memory grew by ${growth}/10 MB after warm-up (allowed ${MAX_GROWTH_MB} MB)")
+endif()
+if(late_growth GREATER late_allowed)
+  message(FATAL_ERROR "resident memory grew by ${late_growth}/10 MB from frame ${frames_half} to ${frames_end} (allowed ${MAX_LATE_GROWTH_MB} MB)")
 endif()

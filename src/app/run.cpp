@@ -116,17 +116,27 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   int timed_pairs = 0;
   int rematched_pairs = 0;
   size_t pair_count = 0;
-  // Resources after warm-up and at the latest sample, taken on the output thread while every
-  // pipeline thread runs: a long run's summary shows whether memory, descriptors or threads grow.
+  // Resources after warm-up, about halfway and at the latest sample, taken on the output thread
+  // while every pipeline thread runs: a long run's summary shows whether memory, descriptors or
+  // threads grow. Memory settles in steps (buffers reaching their largest frame, the heap's
+  // top) in the first few thousand frames; a leak grows on: halfway to the end shows which.
+  // The halfway samples are taken at doubling frame counts, so one of the last two is between
+  // a quarter and a half of the run.
   constexpr std::uint64_t kWarmUpFrames = 200, kResourcePeriod = 50;
-  std::uint64_t output_frames = 0;
+  std::uint64_t output_frames = 0, next_doubling = 2 * kWarmUpFrames;
   std::optional<ProcessResources> warm, latest, previous;  // previous: at least a period before the end
+  std::optional<ProcessResources> doubling, doubling_before;
   std::string output_error;
   // Runs on the pipeline's output thread, one frame at a time, in capture order.
   const auto on_output = [&](const PairOutput& item) {
     if (!output_error.empty()) return;
     ++output_frames;
     if (output_frames == kWarmUpFrames) warm = process_resources(output_frames);
+    if (output_frames == next_doubling) {
+      doubling_before = doubling;
+      doubling = process_resources(output_frames);
+      next_doubling *= 2;
+    }
     if (output_frames > kWarmUpFrames && output_frames % kResourcePeriod == 0) {
       previous = latest;  // the last sample may fall while the source's threads wind down
       latest = process_resources(output_frames);
@@ -208,7 +218,12 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, rematched_pairs, run);
-  if (warm && previous) out << "  resources: " << describe(*warm) << "; " << describe(*previous) << "\n";
+  if (warm && previous) {
+    const auto& halfway = doubling && doubling->frames * 2 <= previous->frames ? doubling : doubling_before;
+    out << "  resources: " << describe(*warm) << "; ";
+    if (halfway) out << describe(*halfway) << "; ";
+    out << describe(*previous) << "\n";
+  }
   if (flight) {
     const LinkStats st = flight->stats();
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down
