@@ -143,7 +143,7 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
   for (const PairOutput& o : live.outputs) {
     if (!o.has_pair) continue;
     const PairResult* a = &o.result;
-    EXPECT_EQ(a->t_curr_ns, o.t_frame_ns - o.host_lead_ns) << "pair " << compared;
+    EXPECT_EQ(a->t_curr_ns, o.t_frame_host_ns()) << "pair " << compared;
     ProcessedFrame prev, curr;
     extractor.extract(recorded_frame(o.t_frame_ns - (a->t_curr_ns - a->t_prev_ns)), prev);
     extractor.extract(recorded_frame(o.t_frame_ns), curr);

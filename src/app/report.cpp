@@ -71,8 +71,8 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
         << run.latency.count() << " pairs)\n";
   if (run.latency.ahead_of_clock() > 0)
     out << "  latency capture to output: not measurable for " << run.latency.ahead_of_clock()
-        << " pairs, whose capture time is ahead of the host clock (the device clock runs at another rate;"
-           " the virtual sensor at rate != 1 keeps the recording's times)\n";
+        << " pairs, whose capture time is ahead of the host clock (a fault of the device clock's mapping:"
+           " sensor/device_clock.hpp takes off every lead a frame proves)\n";
   if (timed_pairs > 0) {
     const double n = timed_pairs;
     const double frame_ms = (total.detect_ms + total.match_ms + total.backproject_ms + total.ransac_ms +

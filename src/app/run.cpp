@@ -143,10 +143,10 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
     try {
       if (!item.frame_problem.empty())
-        err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_ns - item.host_lead_ns) << ": "
+        err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_host_ns()) << ": "
             << item.frame_problem << "\n";
       if (!item.has_pair) {
-        if (trajectory) trajectory->write(item.t_frame_ns - item.host_lead_ns, integrator.pose());
+        if (trajectory) trajectory->write(item.t_frame_host_ns(), integrator.pose());
         return;
       }
       const PairResult& r = item.result;
@@ -162,7 +162,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
       rematched_pairs += r.rematched ? 1 : 0;
       if (log) log->write(r);
       if (flight) flight->send_pair(r);
-      if (trajectory) trajectory->write(item.t_frame_ns - item.host_lead_ns, integrator.pose());
+      if (trajectory) trajectory->write(item.t_frame_host_ns(), integrator.pose());
       evaluator.add(r, origin.inverse() * integrator.pose());
       ++pair_count;
       if (!options.quiet) {

@@ -39,8 +39,8 @@ std::uint64_t content_key(const ProcessedFrame& prev, const ProcessedFrame& curr
   for (const ProcessedFrame* f : {&prev, &curr}) {
     const cv::Mat& d = f->features.descriptors;
     absorb(static_cast<std::uint64_t>(f->features.keypoints.size()));
-    if (d.empty() || !d.isContinuous()) continue;
-    const size_t row_bytes = d.cols * d.elemSize();
+    if (d.empty()) continue;
+    const size_t row_bytes = static_cast<size_t>(d.cols) * d.elemSize();
     for (int k = 0; k < 8; ++k) {
       const std::uint8_t* row = d.ptr<std::uint8_t>(static_cast<int>(static_cast<std::int64_t>(d.rows - 1) * k / 7));
       for (size_t b = 0; b + 8 <= row_bytes; b += 8) {

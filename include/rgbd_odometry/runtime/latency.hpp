@@ -11,9 +11,9 @@ class LatencyHistogram {
   static constexpr double kBinMs = 0.1;
   static constexpr int kBins = 20000;  // 2 s; anything later lands in the last bin (quantile: the max)
 
-  // A negative latency (capture time ahead of the host clock) is not a latency: the device's
-  // clock runs at another rate than the host's (the virtual sensor at rate != 1 keeps the
-  // recording's times). It is counted apart, never binned as 0.
+  // A negative latency (capture time ahead of the host clock) is not a latency but a fault of
+  // the capture times (sensor/device_clock.hpp keeps them from running ahead). It is counted
+  // apart, never binned as 0.
   void add(double latency_ms);
   std::uint64_t count() const { return count_; }  // latencies measured
   std::uint64_t ahead_of_clock() const { return ahead_; }
