@@ -161,7 +161,7 @@ class Run {
         continue;
       }
       // A live frame's timeline is the host steady clock, ahead by its lead (device_clock.hpp).
-      slot.t_capture_host_ns = feed_.live() ? slot.frame.t_colour_ns - slot.frame.host_lead_ns : steady_now_ns();
+      slot.t_capture_host_ns = feed_.live() ? slot.frame.host_colour_ns() : steady_now_ns();
       slot.skipped_before = 0;
       slot.after_gap = after_gap;
       after_gap = false;

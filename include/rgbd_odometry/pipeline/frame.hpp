@@ -17,6 +17,7 @@ struct RgbdFrame {
   std::int64_t t_colour_ns = 0;  // capture time of the colour image
   std::int64_t t_depth_ns = 0;   // capture time of the depth image registered to it
   std::int64_t host_lead_ns = 0;
+  std::int64_t host_colour_ns() const { return t_colour_ns - host_lead_ns; }
   cv::Mat gray;                  // CV_8UC1, the colour image converted to intensity
   cv::Mat depth_m;               // CV_32FC1 metres on the colour pixel grid, 0 = no reading
   Status status = Status::Ok;    // BadFrame / NoDepth when the source could not deliver
