@@ -216,34 +216,45 @@ TEST(RealtimeFaults, AnUnpluggedSensorIsReopenedAndThePairAcrossTheGapIsFlagged)
   // after the gap are out: an event, not a time.
   const int away_ms = static_cast<int>(6 * kFramePeriodS * 1000);
   constexpr int kPairsAfterTheGap = 10;
-  const auto pairs_after_the_gap = [](const LiveRun& run) {
+  const auto solved_pairs_after_the_gap = [](const LiveRun& run) {
     int after = -1;  // none until the gap
-    for (const auto& o : run.outputs)
-      if (o.has_pair && (o.result.status == Status::SensorLost || after >= 0)) ++after;
+    for (const auto& o : run.outputs) {
+      if (!o.has_pair) continue;
+      if (o.result.status == Status::SensorLost) after = 0;
+      else if (after >= 0 && o.result.status == Status::Ok) ++after;
+    }
     return after;
   };
   const LiveRun live =
       run_live(config, virtual_uri("&loop=1000&disconnect=15&reconnect=" + std::to_string(away_ms)),
-               [&](const LiveRun& run) { return pairs_after_the_gap(run) >= kPairsAfterTheGap; });
+               [&](const LiveRun& run) { return solved_pairs_after_the_gap(run) >= kPairsAfterTheGap; });
   EXPECT_EQ(live.stats.sensor_losses, 1);  // the unplug; the stop came before the recording's end
   EXPECT_EQ(live.stats.reopens, 1);
   EXPECT_TRUE(live.said("sensor lost: the sensor was disconnected"));
   EXPECT_TRUE(live.said("sensor back"));
+  // Before the gap every pair solves. Right after the re-open the first colour frames may have
+  // no depth within 20 ms: their depth partner was sent before the streams were started again
+  // (the re-plugged device plays on from where the recording is by then, and a loaded machine
+  // starts the depth stream later than the colour one). Those pairs are flagged NoDepth, as with
+  // a real sensor; once depth flows, every pair solves again.
+  enum class Phase { BeforeTheGap, StartingAgain, Flowing } phase = Phase::BeforeTheGap;
   int lost = 0;
-  bool after_gap = false;
   for (const PairResult* p : live.pairs()) {
     if (p->status == Status::SensorLost) {
       ++lost;
       // (Its dt is not checked: a re-plugged sensor's clock restarts, and the host-time mapping
       // is made anew; with the virtual sensor's time scaled by `rate` that mapping is not wall time.)
       EXPECT_TRUE(p->covariance.array().isNaN().all());
-      after_gap = true;
+      phase = Phase::StartingAgain;
       continue;
     }
-    EXPECT_EQ(p->status, Status::Ok) << "after the gap too: " << after_gap;
+    if (phase == Phase::StartingAgain && p->status == Status::NoDepth) continue;
+    EXPECT_EQ(p->status, Status::Ok) << (phase == Phase::BeforeTheGap ? "before the gap" : "after the gap");
+    if (phase == Phase::StartingAgain) phase = Phase::Flowing;
   }
   EXPECT_EQ(lost, 1);
-  EXPECT_GE(pairs_after_the_gap(live), kPairsAfterTheGap);
+  EXPECT_EQ(phase, Phase::Flowing);
+  EXPECT_GE(solved_pairs_after_the_gap(live), kPairsAfterTheGap);
   // The 15 frames before the gap, each processed or counted, and those after it.
   EXPECT_GE(accounted(live.stats), static_cast<std::uint64_t>(15 + kPairsAfterTheGap));
   EXPECT_EQ(live.pairs().size(), live.stats.frames - 1);
