@@ -46,7 +46,7 @@ const std::string kCheckDir = RGBDO_MAVLINK_CHECK_DIR;
 constexpr double kRate = 1.0;
 constexpr long long kTrueOffsetNs = 1'234'567'000'000LL;  // the simulator's clock minus ours
 
-fs::path scratch(const std::string& name) { return scratch_dir("rgbdo_autopilot", name); }
+ScratchDir scratch(const std::string& name) { return ScratchDir("rgbdo_autopilot", name); }
 
 
 bool wait_for_file(const fs::path& file, int seconds) {
@@ -167,7 +167,8 @@ void converge_over(const std::string& name, const std::function<std::string(cons
                    const std::vector<std::string>& transport_args, int inherit_fd, const std::function<void()>& after_start,
                    const std::function<void()>& after_run = [] {}) {
   ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink")) << "run: npm ci --prefix test/mavlink_check";
-  const fs::path dir = scratch(name);
+  const ScratchDir scratch_dir = scratch(name);
+  const fs::path& dir = scratch_dir.path();
   std::vector<std::string> args = transport_args;
   const std::vector<std::string> common{"--ready-file", (dir / "ready").string(), "--result", (dir / "result.json").string(),
                                         "--capture", (dir / "capture.bin").string(), "--converged-file",
@@ -283,7 +284,8 @@ TEST(FlightLinkAutopilot, OverAPseudoTerminalPx4ConvergesAndOdometryIsUnchanged)
 // until the first valid frame, then answers it; the autopilot's departure and return are news.
 TEST(FlightLinkAutopilot, ALatePeerIsFoundAndAVanishedAutopilotIsReported) {
   ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink"));
-  const fs::path dir = scratch("late");
+  const ScratchDir scratch_dir = scratch("late");
+  const fs::path& dir = scratch_dir.path();
   const int port = free_udp_port();
   // The simulator speaks after 3 s, goes quiet after 20 used answers for as long as the
   // program sends 4 heartbeats (>= 3 s of silence, the timeout is 1.5 s), speaks again and

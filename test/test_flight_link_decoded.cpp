@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 const std::string kCheckDir = RGBDO_MAVLINK_CHECK_DIR;
 constexpr int kPairs = 39;  // the 40 bundled frames
 
-fs::path scratch(const std::string& name) { return scratch_dir("rgbdo_link", name); }
+ScratchDir scratch(const std::string& name) { return ScratchDir("rgbdo_link", name); }
 
 // Starts the decoder; `inherit_fd` (if >= 0) becomes its fd 3. Returns the child's pid.
 pid_t start_decoder(const std::vector<std::string>& args, int inherit_fd) {
@@ -81,7 +81,8 @@ int check(const fs::path& decoded, const fs::path& log, std::string& report) {
 TEST(FlightLinkDecoded, OverUdpEveryFrameDecodesAndMatchesTheLog) {
   ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink"))
       << "run: npm ci --prefix test/mavlink_check (deploy/setup.sh test does)";
-  const fs::path dir = scratch("udp");
+  const ScratchDir scratch_dir = scratch("udp");
+  const fs::path& dir = scratch_dir.path();
   const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
                                        std::to_string(kPairs), "--timeout-ms", "10000", "--out",
                                        (dir / "decoded.jsonl").string()},
@@ -99,7 +100,8 @@ TEST(FlightLinkDecoded, OverUdpEveryFrameDecodesAndMatchesTheLog) {
 
 TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
   ASSERT_TRUE(fs::exists(kCheckDir + "/node_modules/node-mavlink"));
-  const fs::path dir = scratch("pty");
+  const ScratchDir scratch_dir = scratch("pty");
+  const fs::path& dir = scratch_dir.path();
   int master = -1, slave = -1;
   char slave_path[256] = {};
   ASSERT_EQ(::openpty(&master, &slave, slave_path, nullptr, nullptr), 0) << "openpty: " << std::strerror(errno);
@@ -123,7 +125,8 @@ TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
 
 // Nothing listens: the link reports it, and odometry and its log are untouched.
 TEST(FlightLinkDecoded, AnUnreachablePeerCostsTheLogNothing) {
-  const fs::path dir = scratch("unreachable");
+  const ScratchDir scratch_dir = scratch("unreachable");
+  const fs::path& dir = scratch_dir.path();
   std::string output;
   // Port 9 (discard) on loopback: nothing listens, the kernel refuses every datagram.
   ASSERT_EQ(run_program("udp://127.0.0.1:9", dir / "odometry.csv", output), 0) << output;
