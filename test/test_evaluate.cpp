@@ -1,9 +1,11 @@
 // The evaluation against ground truth on synthetic data with known noise: the ground truth's
 // own jitter recovered from its file, and the consistency figures (NEES per pair and over 1-s
-// windows, lag-1 correlation) for errors independent, persistent and shared between pairs.
+// windows, per axis over windows, lag-1 correlation) for errors independent, persistent and
+// shared between pairs, and the streams' time offsets recovered from lagged motions.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 
 #include "rgbd_odometry/core/rng.hpp"
 #include "rgbd_odometry/io/evaluate.hpp"
@@ -21,12 +23,21 @@ Eigen::Isometry3d true_pose(double t) {
   return transform_from_xi(xi);
 }
 
+// A hand-held camera's back-and-forth: 1-2 Hz swings, as in TUM's fr1_xyz.
+Eigen::Isometry3d swinging_pose(double t) {
+  Vector6d xi;
+  xi << 0.1 * std::sin(6 * t), 0.05 * std::sin(9 * t + 1), 0.1 * std::sin(7 * t + 2), 0.05 * std::sin(8 * t),
+      0.06 * std::sin(5 * t + 1), 0.03 * std::sin(11 * t);
+  return transform_from_xi(xi);
+}
+
 // 100 Hz motion capture for `seconds`, each sample off by the given jitter.
-GroundTruth motion_capture(double seconds, double position_sigma_m, double rotation_sigma_rad, std::uint64_t seed) {
+GroundTruth motion_capture(double seconds, double position_sigma_m, double rotation_sigma_rad, std::uint64_t seed,
+                           const std::function<Eigen::Isometry3d(double)>& pose_at = true_pose) {
   Rng rng(seed);
   std::vector<StampedPose> poses;
   for (int i = 0; i < static_cast<int>(seconds * 100); ++i) {
-    Eigen::Isometry3d T = true_pose(i * 0.01);
+    Eigen::Isometry3d T = pose_at(i * 0.01);
     T.translation() += position_sigma_m * Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian());
     T.linear() = T.linear() * rotation_from_vector(rotation_sigma_rad *
                                                   Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian()));
@@ -187,6 +198,79 @@ TEST(Consistency, TheAllowanceAccountsForNoisyGroundTruth) {
   // less noisy than one sample), so a little below 6: measured 4.86.
   EXPECT_GT(with.pair_nees.mean, 4.3);
   EXPECT_LT(with.pair_nees.mean, 5.6);
+}
+
+TEST(Consistency, AnErrorPersistingInOneAxisShowsInThatAxisOverWindows) {
+  // tz errors AR(1) with coefficient 0.9 (a slow drift of the depth), the others independent,
+  // each of the reported size: over 30 pairs tz has up to (1 + 0.9) / (1 - 0.9) = 19x the
+  // variance summed (~13 for windows this short), the other axes ~1.
+  const GroundTruth gt = motion_capture(40, 0, 0, 3);
+  Vector6d sd;
+  sd << 0.002, 0.002, 0.0012, 0.002, 0.0018, 0.001;
+  const Matrix6d C = sd.cwiseAbs2().asDiagonal();
+  Draw draw(C, 9);
+  double tz = 0;
+  const AccuracySummary s = evaluate(gt, C, 40, [&](int) {
+    Vector6d e = draw();
+    tz = 0.9 * tz + std::sqrt(1 - 0.81) * e(2);
+    e(2) = tz;
+    return e;
+  });
+  EXPECT_NEAR(s.axis_nees(2), 1.0, 0.2);  // right per pair
+  EXPECT_GT(s.window_axis_nees(2), 8.0);  // measured 16.5
+  for (int a : {0, 1, 3, 4, 5}) EXPECT_NEAR(s.window_axis_nees(a), 1.0, 0.35) << a;  // measured 0.77-1.10
+}
+
+// Pairs whose rotations were taken `rotation_lag_s` before the stamps, and whose tz
+// `depth_lag_s` before, on the swinging camera; every pair reports a 1 mm / 1 mrad covariance.
+AccuracySummary lagged(const GroundTruth& gt, double rotation_lag_s, double depth_lag_s) {
+  AccuracyEvaluator evaluator(gt, GroundTruthAllowance{0, 0, "none"});
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  const auto motion = [](double t0, double t1) { return swinging_pose(t0).inverse() * swinging_pose(t1); };
+  for (int k = 3; k < 290; ++k) {
+    PairResult r;
+    r.t_prev_ns = static_cast<std::int64_t>(k) * kSecond / 30;
+    r.t_curr_ns = static_cast<std::int64_t>(k + 1) * kSecond / 30;
+    const double t0 = r.t_prev_ns * 1e-9, t1 = r.t_curr_ns * 1e-9;
+    r.T_prev_curr = motion(t0 - rotation_lag_s, t1 - rotation_lag_s);
+    r.T_prev_curr.translation().z() = motion(t0 - depth_lag_s, t1 - depth_lag_s).translation().z();
+    r.covariance = Matrix6d::Identity() * 1e-6;
+    pose = pose * r.T_prev_curr;
+    evaluator.add(r, pose);
+  }
+  return evaluator.summary();
+}
+
+TEST(TimeOffset, TheStreamsLatenciesAreRecoveredFromTheRotationsAndTz) {
+  const GroundTruth gt = motion_capture(10, 0, 0, 1, swinging_pose);
+  for (const auto& [colour_ms, depth_ms] : {std::pair{14.0, 40.0}, std::pair{-7.0, 0.0}, std::pair{0.0, 25.0}}) {
+    const AccuracySummary s = lagged(gt, colour_ms * 1e-3, depth_ms * 1e-3);
+    const TimeOffsetFit& c = s.rotation_time_offset;
+    const TimeOffsetFit& d = s.depth_time_offset;
+    ASSERT_TRUE(c.found && d.found) << colour_ms << " " << depth_ms;
+    EXPECT_EQ(c.pairs, 287);  // every pair: the ground truth covers +-60 ms around each
+    // The ground truth interpolated between 100 Hz samples, and the parabola between 1 ms
+    // steps: measured within 0.005 ms.
+    EXPECT_NEAR(c.offset_s * 1e3, colour_ms, 0.05);
+    EXPECT_NEAR(d.offset_s * 1e3, depth_ms, 0.05);
+    if (colour_ms != 0) {
+      EXPECT_LT(c.rmse_at_offset, 0.05 * c.rmse_at_stamps);  // measured 0.015, 0.035
+    }
+    EXPECT_LE(c.rmse_at_offset, c.rmse_at_stamps);
+  }
+}
+
+TEST(TimeOffset, NoneIsFoundBeyondTheSearchOrWithTooFewPairs) {
+  const GroundTruth gt = motion_capture(10, 0, 0, 1, swinging_pose);
+  const AccuracySummary far = lagged(gt, 0.1, 0.0);  // 100 ms: beyond +-60 ms
+  EXPECT_FALSE(far.rotation_time_offset.found);
+  EXPECT_GT(far.rotation_time_offset.pairs, 0);
+  EXPECT_TRUE(far.depth_time_offset.found);
+  // Ground truth for only 0.6 s: fewer than 30 pairs covered at every offset.
+  const GroundTruth short_gt = motion_capture(0.6, 0, 0, 1, swinging_pose);
+  const AccuracySummary few = lagged(short_gt, 0.01, 0.01);
+  EXPECT_FALSE(few.rotation_time_offset.found);
+  EXPECT_EQ(few.rotation_time_offset.pairs, 0);
 }
 
 }  // namespace

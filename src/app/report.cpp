@@ -29,6 +29,20 @@ void print_nees(std::ostream& out, const char* name, const NeesStats& n) {
       << "% below the chi2(6) 95% gate\n";
 }
 
+// Which time offset against the ground truth the estimated motions' `part` matches best: a
+// stream's capture-to-stamp latency (or the reference's own time alignment).
+void print_time_offset(std::ostream& out, const char* part, const TimeOffsetFit& o, double factor, const char* unit) {
+  if (o.pairs == 0) return;
+  out << std::fixed << std::setprecision(1) << "  time offset against the ground truth, " << part << ": ";
+  if (!o.found) {
+    out << "no best offset within +-" << o.max_offset_s * 1e3 << " ms (" << o.pairs << " pairs)\n";
+    return;
+  }
+  out << "best with the frames taken " << o.offset_s * 1e3 << " ms before their stamps (" << o.pairs
+      << " pairs; RMSE " << std::setprecision(3) << o.rmse_at_stamps * factor << " " << unit << " at the stamps, "
+      << o.rmse_at_offset * factor << " at the offset)\n";
+}
+
 }  // namespace
 
 std::string pair_line(const PairResult& r, std::size_t index, bool verbose) {
@@ -102,9 +116,14 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
       << " " << 100 * s.axis_within_3sigma(4) << " " << 100 * s.axis_within_3sigma(5) << "]\n";
   print_nees(out, "joint 6-D NEES per pair", s.pair_nees);
   print_nees(out, "joint 6-D NEES over 1 s windows", s.window_nees);
+  out << std::setprecision(2) << "    over 1 s windows, per axis: mean e^2/var [t " << s.window_axis_nees(0) << " "
+      << s.window_axis_nees(1) << " " << s.window_axis_nees(2) << ", r " << s.window_axis_nees(3) << " "
+      << s.window_axis_nees(4) << " " << s.window_axis_nees(5) << "]\n";
   out << std::setprecision(2) << "    lag-1 correlation of consecutive pairs' errors (" << s.lag1_pairs << " pairs): [t "
       << s.lag1_correlation(0) << " " << s.lag1_correlation(1) << " " << s.lag1_correlation(2) << ", r "
       << s.lag1_correlation(3) << " " << s.lag1_correlation(4) << " " << s.lag1_correlation(5) << "]\n";
+  print_time_offset(out, "the rotations (colour)", s.rotation_time_offset, kRadToDeg, "deg");
+  print_time_offset(out, "tz (depth)", s.depth_time_offset, 1e3, "mm");
 }
 
 }  // namespace rgbdo

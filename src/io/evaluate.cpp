@@ -14,6 +14,12 @@ namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kChi2_6_95 = 12.5916;
 constexpr std::int64_t kWindowNs = 1'000'000'000;
+// Capture-to-stamp latencies of USB cameras and mocap alignments are tens of ms; a lag beyond
+// two frame periods would be a wrong clock, not a latency.
+constexpr std::int64_t kMaxTimeOffsetNs = 60'000'000;
+constexpr std::int64_t kTimeOffsetStepNs = 1'000'000;
+constexpr int kMinTimeOffsetPairs = 30;
+constexpr size_t kMaxTimeOffsetPairs = 3000;  // a long replay is subsampled: the fit needs no more
 
 double nees_of(const Vector6d& e, const Matrix6d& c) { return e.dot(c.ldlt().solve(e)); }
 }  // namespace
@@ -119,7 +125,8 @@ std::vector<AccuracyEvaluator::Window> AccuracyEvaluator::windows() const {
       after = steps_[k].T * after;
     }
     const Vector6d e = right_perturbation_between(g0->inverse() * *g1, T);
-    out.push_back({first, last, nees_of(e, c + allowance)});
+    const Matrix6d c_allowed = c + allowance;
+    out.push_back({first, last, nees_of(e, c_allowed), e.cwiseAbs2().cwiseQuotient(c_allowed.diagonal())});
   }
   return out;
 }
@@ -149,8 +156,14 @@ AccuracySummary AccuracyEvaluator::summary() const {
     s.axis_within_3sigma /= static_cast<double>(evaluated_.size());
   }
   std::vector<double> windows;
-  for (const Window& w : this->windows()) windows.push_back(w.nees);
+  for (const Window& w : this->windows()) {
+    windows.push_back(w.nees);
+    s.window_axis_nees += w.axis_ratio;
+  }
   s.window_nees = nees_stats(windows);
+  if (!windows.empty()) s.window_axis_nees /= static_cast<double>(windows.size());
+  s.rotation_time_offset = fit_time_offset(OffsetFitPart::Rotation);
+  s.depth_time_offset = fit_time_offset(OffsetFitPart::OpticalAxisTranslation);
 
   // Lag-1 correlation (Pearson) over pairs whose successor is the next evaluated pair.
   std::vector<std::pair<Vector6d, Vector6d>> lagged;
@@ -191,6 +204,51 @@ AccuracySummary AccuracyEvaluator::summary() const {
   s.drift_translation_mps = error_stats(drift_t);
   s.drift_rotation_degps = error_stats(drift_r);
   return s;
+}
+
+TimeOffsetFit AccuracyEvaluator::fit_time_offset(OffsetFitPart part) const {
+  TimeOffsetFit fit;
+  fit.max_offset_s = static_cast<double>(kMaxTimeOffsetNs) * 1e-9;
+  // Good pairs whose ground truth covers every shift tried, so that each shift is judged on
+  // the same pairs.
+  std::vector<const Step*> usable;
+  for (const Step& s : steps_)
+    if (s.ok && groundtruth_.at(s.t_prev_ns - kMaxTimeOffsetNs) && groundtruth_.at(s.t_prev_ns + kMaxTimeOffsetNs) &&
+        groundtruth_.at(s.t_curr_ns - kMaxTimeOffsetNs) && groundtruth_.at(s.t_curr_ns + kMaxTimeOffsetNs))
+      usable.push_back(&s);
+  if (usable.size() < static_cast<size_t>(kMinTimeOffsetPairs)) return fit;
+  const size_t stride = (usable.size() + kMaxTimeOffsetPairs - 1) / kMaxTimeOffsetPairs;
+  std::vector<const Step*> pairs;
+  for (size_t i = 0; i < usable.size(); i += stride) pairs.push_back(usable[i]);
+  fit.pairs = static_cast<int>(pairs.size());
+  // Mean squared error of the part with the frames taken `offset` before their stamps.
+  const auto mean_square = [&](std::int64_t offset_ns) {
+    double sum = 0;
+    for (const Step* s : pairs) {
+      const Eigen::Isometry3d gt_rel =
+          groundtruth_.at(s->t_prev_ns - offset_ns)->inverse() * *groundtruth_.at(s->t_curr_ns - offset_ns);
+      const double e = part == OffsetFitPart::Rotation ? rotation_angle(gt_rel.linear().transpose() * s->T.linear())
+                                                       : s->T.translation().z() - gt_rel.translation().z();
+      sum += e * e;
+    }
+    return sum / static_cast<double>(pairs.size());
+  };
+  const int steps = static_cast<int>(kMaxTimeOffsetNs / kTimeOffsetStepNs);
+  std::vector<double> cost;
+  for (int k = -steps; k <= steps; ++k) cost.push_back(mean_square(k * kTimeOffsetStepNs));
+  const auto best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  fit.rmse_at_stamps = std::sqrt(cost[static_cast<size_t>(steps)]);
+  if (best == 0 || best == 2 * steps) return fit;  // at the edge: no minimum inside the search
+  // The parabola through the best step and its neighbours.
+  const double a = cost[static_cast<size_t>(best - 1)], b = cost[static_cast<size_t>(best)],
+               c = cost[static_cast<size_t>(best + 1)];
+  const double curvature = a - 2 * b + c;
+  const double vertex = curvature > 0 ? std::clamp(0.5 * (a - c) / curvature, -0.5, 0.5) : 0.0;
+  const double offset_ns = (best - steps + vertex) * static_cast<double>(kTimeOffsetStepNs);
+  fit.found = true;
+  fit.offset_s = offset_ns * 1e-9;
+  fit.rmse_at_offset = std::sqrt(mean_square(std::llround(offset_ns)));
+  return fit;
 }
 
 std::vector<EvaluatedPair> AccuracyEvaluator::evaluated_pairs() const {

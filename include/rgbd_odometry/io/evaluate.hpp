@@ -8,7 +8,11 @@
 //  - over 1-second windows, the motions composed and their covariances propagated to first
 //    order with the SE(3) adjoint as independent errors: what a filter integrating the
 //    velocities believes; errors correlated between pairs show here and not per pair;
-//  - the lag-1 correlation of consecutive pairs' errors, per axis.
+//  - the lag-1 correlation of consecutive pairs' errors, per axis;
+//  - the time offset between the frames' stamps and the ground truth's clock that matches the
+//    rotations best: a capture-to-stamp latency, or the reference's own time alignment. A lag
+//    shows as errors that follow the change of the motion (angular acceleration x lag x dt),
+//    correlated between consecutive pairs and growing with the frame interval.
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <map>
@@ -37,6 +41,20 @@ NeesStats nees_stats(std::vector<double> values);
 
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 
+// The offset tau (frames taken tau before their stamps, tau < 0: after) for which the ground
+// truth between the shifted stamps matches one part of the estimated motions best, searched
+// over +-max_offset_s; not found at the edge of the search or with too few pairs. Fitted on the
+// rotations (driven by the colour images' features) and, apart, on the translation along the
+// optical axis (driven by the depth images): the two streams' latencies.
+struct TimeOffsetFit {
+  bool found = false;
+  double offset_s = 0;
+  double max_offset_s = 0;
+  int pairs = 0;               // pairs whose ground truth covers every offset tried
+  double rmse_at_stamps = 0;   // of the fitted part (rad or m) over those pairs
+  double rmse_at_offset = 0;
+};
+
 struct AccuracySummary {
   int pairs = 0;
   int failed = 0;
@@ -52,6 +70,10 @@ struct AccuracySummary {
   Vector6 axis_within_3sigma = Vector6::Zero();
   Vector6 lag1_correlation = Vector6::Zero();  // of consecutive pairs' errors
   int lag1_pairs = 0;
+  // Per axis over the 1-s windows, as axis_nees per pair: which axes' errors persist.
+  Vector6 window_axis_nees = Vector6::Zero();
+  TimeOffsetFit rotation_time_offset;  // the colour stream's
+  TimeOffsetFit depth_time_offset;     // of tz: the depth stream's
 };
 
 // One evaluated pair, for plots (the evaluation CSV).
@@ -88,9 +110,12 @@ class AccuracyEvaluator {
   struct Window {
     size_t first, last;  // indices in steps_ of its first and last pair
     double nees;
+    Vector6d axis_ratio;  // e_i^2 / var_i
   };
   // Every 1-s window: from each pair, the shortest run of consecutive good pairs spanning 1 s.
   std::vector<Window> windows() const;
+  enum class OffsetFitPart { Rotation, OpticalAxisTranslation };
+  TimeOffsetFit fit_time_offset(OffsetFitPart part) const;
 
   const GroundTruth& groundtruth_;
   GroundTruthAllowance allowance_;
