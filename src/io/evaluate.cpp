@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -225,8 +226,11 @@ TimeOffsetFit AccuracyEvaluator::fit_time_offset(OffsetFitPart part) const {
   const auto mean_square = [&](std::int64_t offset_ns) {
     double sum = 0;
     for (const Step* s : pairs) {
-      const Eigen::Isometry3d gt_rel =
-          groundtruth_.at(s->t_prev_ns - offset_ns)->inverse() * *groundtruth_.at(s->t_curr_ns - offset_ns);
+      const auto g0 = groundtruth_.at(s->t_prev_ns - offset_ns), g1 = groundtruth_.at(s->t_curr_ns - offset_ns);
+      // Cannot happen for a pair whose search ends were found (a gap the lookup refuses is
+      // longer than the search), but a shift not judged on every pair must never win.
+      if (!g0 || !g1) return std::numeric_limits<double>::infinity();
+      const Eigen::Isometry3d gt_rel = g0->inverse() * *g1;
       const double e = part == OffsetFitPart::Rotation ? rotation_angle(gt_rel.linear().transpose() * s->T.linear())
                                                        : s->T.translation().z() - gt_rel.translation().z();
       sum += e * e;
@@ -238,11 +242,12 @@ TimeOffsetFit AccuracyEvaluator::fit_time_offset(OffsetFitPart part) const {
   for (int k = -steps; k <= steps; ++k) cost.push_back(mean_square(k * kTimeOffsetStepNs));
   const auto best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
   fit.rmse_at_stamps = std::sqrt(cost[static_cast<size_t>(steps)]);
-  if (best == 0 || best == 2 * steps) return fit;  // at the edge: no minimum inside the search
+  // At the edge, or no finite cost: no minimum inside the search.
+  if (best == 0 || best == 2 * steps || !std::isfinite(cost[static_cast<size_t>(best)])) return fit;
   // The parabola through the best step and its neighbours.
   const double a = cost[static_cast<size_t>(best - 1)], b = cost[static_cast<size_t>(best)],
                c = cost[static_cast<size_t>(best + 1)];
-  const double curvature = a - 2 * b + c;
+  const double curvature = std::isfinite(a) && std::isfinite(c) ? a - 2 * b + c : 0.0;
   const double vertex = curvature > 0 ? std::clamp(0.5 * (a - c) / curvature, -0.5, 0.5) : 0.0;
   const double offset_ns = (best - steps + vertex) * static_cast<double>(kTimeOffsetStepNs);
   fit.found = true;
