@@ -163,8 +163,9 @@ AccuracySummary AccuracyEvaluator::summary() const {
   }
   s.window_nees = nees_stats(windows);
   if (!windows.empty()) s.window_axis_nees /= static_cast<double>(windows.size());
-  s.rotation_time_offset = fit_time_offset(OffsetFitPart::Rotation);
-  s.depth_time_offset = fit_time_offset(OffsetFitPart::OpticalAxisTranslation);
+  const std::vector<const Step*> offset_pairs = time_offset_pairs();
+  s.rotation_time_offset = fit_time_offset(offset_pairs, OffsetFitPart::Rotation);
+  s.depth_time_offset = fit_time_offset(offset_pairs, OffsetFitPart::OpticalAxisTranslation);
 
   // Lag-1 correlation (Pearson) over pairs whose successor is the next evaluated pair.
   std::vector<std::pair<Vector6d, Vector6d>> lagged;
@@ -207,20 +208,23 @@ AccuracySummary AccuracyEvaluator::summary() const {
   return s;
 }
 
-TimeOffsetFit AccuracyEvaluator::fit_time_offset(OffsetFitPart part) const {
-  TimeOffsetFit fit;
-  fit.max_offset_s = static_cast<double>(kMaxTimeOffsetNs) * 1e-9;
-  // Good pairs whose ground truth covers every shift tried, so that each shift is judged on
-  // the same pairs.
+std::vector<const AccuracyEvaluator::Step*> AccuracyEvaluator::time_offset_pairs() const {
   std::vector<const Step*> usable;
   for (const Step& s : steps_)
     if (s.ok && groundtruth_.at(s.t_prev_ns - kMaxTimeOffsetNs) && groundtruth_.at(s.t_prev_ns + kMaxTimeOffsetNs) &&
         groundtruth_.at(s.t_curr_ns - kMaxTimeOffsetNs) && groundtruth_.at(s.t_curr_ns + kMaxTimeOffsetNs))
       usable.push_back(&s);
-  if (usable.size() < static_cast<size_t>(kMinTimeOffsetPairs)) return fit;
+  if (usable.size() < static_cast<size_t>(kMinTimeOffsetPairs)) return {};
   const size_t stride = (usable.size() + kMaxTimeOffsetPairs - 1) / kMaxTimeOffsetPairs;
   std::vector<const Step*> pairs;
   for (size_t i = 0; i < usable.size(); i += stride) pairs.push_back(usable[i]);
+  return pairs;
+}
+
+TimeOffsetFit AccuracyEvaluator::fit_time_offset(const std::vector<const Step*>& pairs, OffsetFitPart part) const {
+  TimeOffsetFit fit;
+  fit.max_offset_s = static_cast<double>(kMaxTimeOffsetNs) * 1e-9;
+  if (pairs.empty()) return fit;
   fit.pairs = static_cast<int>(pairs.size());
   // Mean squared error of the part with the frames taken `offset` before their stamps.
   const auto mean_square = [&](std::int64_t offset_ns) {

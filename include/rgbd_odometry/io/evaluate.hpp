@@ -9,8 +9,9 @@
 //    order with the SE(3) adjoint as independent errors: what a filter integrating the
 //    velocities believes; errors correlated between pairs show here and not per pair;
 //  - the lag-1 correlation of consecutive pairs' errors, per axis;
-//  - the time offset between the frames' stamps and the ground truth's clock that matches the
-//    rotations best: a capture-to-stamp latency, or the reference's own time alignment. A lag
+//  - the time offsets between the frames' stamps and the ground truth's clock that match the
+//    rotations (colour) and tz (depth) best: the streams' capture-to-stamp latencies, or the
+//    reference's own time alignment. A lag
 //    shows as errors that follow the change of the motion (angular acceleration x lag x dt),
 //    correlated between consecutive pairs and growing with the frame interval.
 #include <Eigen/Geometry>
@@ -114,8 +115,11 @@ class AccuracyEvaluator {
   };
   // Every 1-s window: from each pair, the shortest run of consecutive good pairs spanning 1 s.
   std::vector<Window> windows() const;
+  // The good pairs whose ground truth covers every shift tried (subsampled for long runs), so
+  // that each shift is judged on the same pairs.
+  std::vector<const Step*> time_offset_pairs() const;
   enum class OffsetFitPart { Rotation, OpticalAxisTranslation };
-  TimeOffsetFit fit_time_offset(OffsetFitPart part) const;
+  TimeOffsetFit fit_time_offset(const std::vector<const Step*>& pairs, OffsetFitPart part) const;
 
   const GroundTruth& groundtruth_;
   GroundTruthAllowance allowance_;
