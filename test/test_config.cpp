@@ -155,6 +155,12 @@ TEST(ConfigValidation, CrossFieldChecksNameTheKey) {
   c = Config{};
   c.covariance.resample_cell_px = -1;
   expect_error_naming([&] { validate(c); }, "covariance.resample_cell_px");
+  c = Config{};
+  c.covariance.depth_latency_sigma_s = 25;  // milliseconds given for seconds
+  expect_error_naming([&] { validate(c); }, "covariance.depth_latency_sigma_s");
+  c = Config{};
+  c.covariance.colour_latency_sigma_s = -0.01;
+  expect_error_naming([&] { validate(c); }, "covariance.colour_latency_sigma_s");
 }
 
 TEST(ConfigValidation, KeysWhereZeroIsSingularRefuseZero) {

@@ -60,6 +60,9 @@ std::vector<Param> param_table(Config& c) {
       {"covariance.depth_lateral_sigma_px", &c.covariance.depth_lateral_sigma_px, 0.0, 100},
       {"covariance.timing_sigma_s", &c.covariance.timing_sigma_s, -1, 1},
       {"covariance.resample_cell_px", &c.covariance.resample_cell_px, 0, 1e5},
+      {"covariance.colour_latency_sigma_s", &c.covariance.colour_latency_sigma_s, 0, 1},
+      {"covariance.depth_latency_sigma_s", &c.covariance.depth_latency_sigma_s, 0, 1},
+      {"covariance.integration_window_s", &c.covariance.integration_window_s, 0, 3600},
       {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
       {"covariance.residual_variance_factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},

@@ -39,6 +39,14 @@ double PerturbationCovariance::variance_factor(const std::vector<Eigen::Vector3d
 Vector6d PerturbationCovariance::timing_gradient(const std::vector<Eigen::Vector3d>& prev,
                                                  const std::vector<Eigen::Vector3d>& curr,
                                                  const std::vector<PointNoise>& noise, bool of_prev) {
+  rates_.resize(noise.size());
+  for (size_t k = 0; k < noise.size(); ++k) rates_[k] = noise[k].depth_rate_mps;
+  return depth_shift_response(prev, curr, rates_, of_prev);
+}
+
+Vector6d PerturbationCovariance::depth_shift_response(const std::vector<Eigen::Vector3d>& prev,
+                                                      const std::vector<Eigen::Vector3d>& curr,
+                                                      std::span<const double> rates_mps, bool of_prev) {
   // Central difference over +-1 ms: the fit is linear in the depths to far better than that.
   constexpr double h = 1e-3;
   const std::vector<Eigen::Vector3d>& moving = of_prev ? prev : curr;
@@ -47,12 +55,28 @@ Vector6d PerturbationCovariance::timing_gradient(const std::vector<Eigen::Vector
     const double dt = side == 0 ? h : -h;
     moved_.resize(moving.size());
     for (size_t k = 0; k < moving.size(); ++k)
-      moved_[k] = moving[k] * (1.0 + dt * noise[k].depth_rate_mps / moving[k].z());  // along the ray
+      moved_[k] = moving[k] * (1.0 + dt * rates_mps[k] / moving[k].z());  // along the ray
     Eigen::Isometry3d T;
     if (!fit_rigid(of_prev ? curr : moved_, of_prev ? moved_ : prev, weights_, T)) return Vector6d::Zero();
     xi[side] = xi_from_transform(T);
   }
   return (xi[0] - xi[1]) / (2 * h);
+}
+
+Matrix6d PerturbationCovariance::depth_latency_response(const std::vector<Eigen::Vector3d>& prev,
+                                                        const std::vector<Eigen::Vector3d>& curr) {
+  // Column i: the camera moving at unit rate i (m/s or rad/s) changes a static point's depth
+  // at dZ/dt = -(v + w x P)_z; the current frame's depths are read that much late, per second.
+  Matrix6d response = Matrix6d::Zero();
+  if (weights_.size() != curr.size() || prev.size() != curr.size()) return response;
+  rates_.resize(curr.size());
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero(), w = Eigen::Vector3d::Zero();
+    (i < 3 ? v : w)(i % 3) = 1.0;
+    for (size_t k = 0; k < curr.size(); ++k) rates_[k] = -(v + w.cross(curr[k])).z();
+    response.col(i) = depth_shift_response(prev, curr, rates_, false);
+  }
+  return response;
 }
 
 PerturbationCovariance::PerturbationCovariance(const CovarianceConfig& config, int max_points)
@@ -73,6 +97,7 @@ void PerturbationCovariance::reserve(int points) {
   paper_prev_.reserve(static_cast<size_t>(points));
   paper_curr_.reserve(static_cast<size_t>(points));
   moved_.reserve(static_cast<size_t>(points));
+  rates_.reserve(static_cast<size_t>(points));
   cell_.reserve(static_cast<size_t>(points));
   // A pair reaching a cell no earlier pair reached must not allocate: room for kMaxCells
   // (the default 160-px cells of a 640 x 480 image are 12).

@@ -85,7 +85,8 @@ PairEstimator::PairEstimator(const Config& config)
       noise_(sensor_noise(config)),
       matcher_(config.matching.ratio),
       ransac_(config.ransac, sensor_noise(config), config.features.max_features),
-      covariance_(config.covariance, config.features.max_features) {
+      covariance_(config.covariance, config.features.max_features),
+      latency_(latency_sigmas(config.covariance)) {
   // Sized once for the largest possible frame: the pair stage never allocates afterwards.
   const auto capacity = static_cast<size_t>(config.features.max_features);
   matches_.reserve(capacity);
@@ -181,6 +182,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const auto fail = [&](Status s) {
     r.status = s;
     last_motion_.reset();  // a gap: the old velocity says nothing about the next pair
+    last_rate_.reset();
     return r;
   };
   // The newer frame's problem is the news; the older one's was reported with its own pair.
@@ -242,6 +244,12 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
         config_.covariance.timing_sigma_s >= 0 ? config_.covariance.timing_sigma_s : stamp_jitter_.offset_sigma_s();
     cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, inlier_prev_noise_, inlier_curr_noise_, inlier_cells_,
                                   fit_.T_prev_curr, timing_sigma_s, covariance_rng, cov);
+    if (cov_ok && dt_s > 0) {
+      const PairRate rate{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};
+      const Matrix6d depth_response = covariance_.depth_latency_response(inlier_prev_, inlier_curr_);
+      cov += config_.covariance.scale * latency_covariance(latency_, depth_response, rate, last_rate_);
+      last_rate_ = rate;
+    }
   }
   r.times.covariance_ms = ms_since(t0);
   if (!cov_ok) return fail(Status::CovarianceFailed);

@@ -86,6 +86,18 @@ struct CovarianceConfig {
   // Standard deviation of a frame's colour-to-depth capture-time offset error, seconds; < 0:
   // estimated online from the jitter of the streams' own frame intervals.
   double timing_sigma_s = -1;
+  // What the stamps get wrong in common, frame after frame (pipeline/latency_covariance.hpp):
+  // sigma of the colour stream's capture latency behind its stamps, and of the depth stream's
+  // behind the colour, seconds; 0: calibrated away. Against motion capture, TUM fr1's Kinect
+  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct (README,
+  // "Covariance"): depth 25 ms. Its colour lags the stamps by 14-19 ms, a constant delay
+  // a flight controller is told (PX4 EKF2_EV_DELAY, ArduPilot VISO_DELAY_MS) and which the
+  // odometry only has to cover in part: colour 7.5 ms, half of it.
+  double colour_latency_sigma_s = 0.0075;
+  double depth_latency_sigma_s = 0.025;
+  // The horizon over which a consumer integrating the reported motions should stay covered
+  // against those latencies, seconds (each pair carries its share); 0: per pair only.
+  double integration_window_s = 1.0;
   // Each perturbation also resamples the inliers by image cells of this size (pixels; a
   // Bayesian bootstrap by cell, covariance.hpp): errors that vary smoothly over the image are
   // shared by a cell's points. 0: no resampling.

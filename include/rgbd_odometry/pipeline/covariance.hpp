@@ -57,6 +57,11 @@ class PerturbationCovariance {
   [[nodiscard]] bool estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                               const Eigen::Isometry3d& T_prev_curr, Rng& rng, Matrix6d& covariance);
 
+  // d xi / d delta per unit camera rate: column i is what reading the current frame's depths
+  // delta seconds late does to the fitted motion while the camera moves at unit rate i
+  // (xi order: m/s, then rad/s). Uses the last estimate's weights: call after estimate().
+  Matrix6d depth_latency_response(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr);
+
   // The N parameter vectors of the last estimate (tests, diagnostics).
   const std::vector<Vector6d>& samples() const { return samples_; }
   const char* kernel_name() const { return kernels_.name; }
@@ -73,6 +78,9 @@ class PerturbationCovariance {
   // d xi / d t of a capture-time error of one frame's depths (moved along their rays).
   Vector6d timing_gradient(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                            const std::vector<PointNoise>& noise, bool of_prev);
+  // d xi / d t of moving one frame's depths along their rays at rates_mps[k].
+  Vector6d depth_shift_response(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                                std::span<const double> rates_mps, bool of_prev);
   CovarianceConfig config_;
   const simd::KernelSet& kernels_;
   int padded_perturbations_;
@@ -87,6 +95,7 @@ class PerturbationCovariance {
   std::vector<float> cell_weight_;                       // [cell * padded perturbations + p]
   std::vector<double> cell_total_, perturbation_weight_;  // weight per cell; per perturbation
   std::vector<Eigen::Vector3d> moved_;  // one frame's points with their depths moved
+  std::vector<double> rates_;           // and the rates they were moved at
   Matrix6d last_timing_ = Matrix6d::Zero();
 };
 

@@ -12,6 +12,7 @@
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/pipeline/latency_covariance.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/pipeline/ransac.hpp"
 #include "rgbd_odometry/pipeline/stamp_jitter.hpp"
@@ -27,7 +28,10 @@ class PairEstimator {
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
-  void forget_motion() { last_motion_.reset(); }
+  void forget_motion() {
+    last_motion_.reset();
+    last_rate_.reset();
+  }
 
  private:
   // Matching (within the window window_prior predicts, or over all pairs when null), 3-D
@@ -56,6 +60,9 @@ class PairEstimator {
   StampJitter stamp_jitter_;
   // Velocity of the last good pair: the motion prior for timing compensation.
   std::optional<MotionPrior> last_motion_;
+  // The last good pair's rate and covariance (before its latency terms), for the next's.
+  LatencySigmas latency_;
+  std::optional<PairRate> last_rate_;
 };
 
 }  // namespace rgbdo

@@ -1,0 +1,58 @@
+#pragma once
+// What an uncalibrated capture latency does to the reported motions, as a covariance term.
+//
+// A sensor's stamps are not its exposure times: each stream is captured some fixed time
+// before it is stamped, and the colour and depth streams of an unsynchronised sensor (Kinect
+// v1, Xtion) are captured at different times. Against TUM's motion capture, fr1's Kinect
+// matches best with the colour taken 14-19 ms and the depth 39-42 ms before their stamps, at
+// every frame rate tried (`io/evaluate`'s time offsets; README, "Covariance"). The per-frame
+// stamp jitter (covariance.timing_sigma_s) does not see such a latency: it is the same for
+// every frame. What it does:
+//  - colour, latency d_c: the pair measures the motion over [t_prev - d_c, t_curr - d_c]
+//    instead of [t_prev, t_curr], off by d_c times the change of the camera's rate between the
+//    two frames;
+//  - depth, latency d_d behind the colour: each frame's depths are read d_d late, off by d_d
+//    times dZ/dt; between two frames what is left is d_d times the change of rate, through
+//    the fit (`depth_response`, PerturbationCovariance::depth_latency_response).
+// Both are errors of the pair, not of a point: no number of points averages them away.
+// With d ~ N(0, sigma^2), each pair gets, with D = the change of rate between its two frames,
+//    per pair:  sigma_c^2 D D^T + sigma_d^2 G D D^T G^T.
+// D is estimated from this pair's and the previous pair's rates, whose own noise would
+// inflate D D^T by their covariances: D D^T is shrunk by the share of it that noise explains.
+// Across pairs the error telescopes: over a window it is d times the change of rate between
+// the window's ends, which the per-pair terms, as a filter adds them, do not cover. Each pair
+// therefore also carries its share of that over a consumer's integration window T_w,
+//    over windows:  (dt / T_w) (sigma_c^2 (r r^T + r' r'^T) + sigma_d^2 G (...) G^T),
+// r and r' this pair's and the previous pair's rates: summed over the pairs of a window, it is
+// sigma^2 (2 x the mean r r^T), what the change of rate between its ends has on average.
+#include <optional>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/geometry.hpp"
+
+namespace rgbdo {
+
+// One solved pair as the latency terms see it.
+struct PairRate {
+  Vector6d rate = Vector6d::Zero();          // xi / dt: m/s, then rad/s
+  Matrix6d covariance = Matrix6d::Zero();    // of xi, before the latency terms
+  double dt_s = 0;
+};
+
+struct LatencySigmas {
+  double colour_s = 0;             // sigma of the colour stream's latency behind its stamps
+  double depth_s = 0;              // sigma of the depth stream's latency behind the colour
+  double integration_window_s = 0;  // T_w; <= 0: no window share
+};
+
+inline LatencySigmas latency_sigmas(const CovarianceConfig& c) {
+  return {c.colour_latency_sigma_s, c.depth_latency_sigma_s, c.integration_window_s};
+}
+
+// The latency covariance of pair `curr`; previous: the pair before it, when the two are
+// contiguous (no gap). Without it the change of rate is taken to be as large as the rate.
+// depth_response: PerturbationCovariance::depth_latency_response of this pair.
+Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_response, const PairRate& curr,
+                            const std::optional<PairRate>& previous);
+
+}  // namespace rgbdo
