@@ -246,7 +246,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
                                   fit_.T_prev_curr, timing_sigma_s, covariance_rng, cov);
     if (cov_ok && dt_s > 0) {
       const PairRate rate{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};
-      const Matrix6d depth_response = covariance_.depth_latency_response(inlier_prev_, inlier_curr_);
+      const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)
+                                                           : Matrix6d::Zero();
       cov += config_.covariance.scale * latency_covariance(latency_, depth_response, rate, last_rate_);
       last_rate_ = rate;
     }

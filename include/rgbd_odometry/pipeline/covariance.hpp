@@ -27,6 +27,8 @@
 // of points averages away. Its effect g_f = d xi / d t_f is found by refitting with the frame's
 // depths moved, and sigma_t^2 (g_prev g_prev^T + g_curr g_curr^T) is added.
 // C = scale * (sample covariance + timing term); scale is 1 unless configured.
+// Latencies common to consecutive frames need the previous pair: the pair stage adds their
+// terms (pipeline/latency_covariance.hpp, with depth_latency_response below).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <span>
