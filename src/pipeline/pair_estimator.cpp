@@ -23,6 +23,13 @@ MotionPrior motion_from(const Eigen::Isometry3d& T_prev_curr, double dt_s) {
   return m;
 }
 
+MotionPrior motion_of(const PairRate& pair) {
+  MotionPrior m;
+  m.velocity_mps = pair.rate.head<3>();
+  m.angular_velocity_radps = pair.rate.tail<3>();
+  return m;
+}
+
 // Decorrelates the per-pair random streams while keeping every pair replayable from the seed:
 // the (index + 1)-th output of a splitmix64 generator started at the seed.
 std::uint64_t mix(std::uint64_t seed, std::uint64_t index) {
@@ -181,8 +188,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.features_curr = static_cast<int>(curr.features.keypoints.size());
   const auto fail = [&](Status s) {
     r.status = s;
-    last_motion_.reset();  // a gap: the old velocity says nothing about the next pair
-    last_rate_.reset();
+    last_pair_.reset();  // a gap: the old velocity says nothing about the next pair
     return r;
   };
   // The newer frame's problem is the news; the older one's was reported with its own pair.
@@ -195,7 +201,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const CostStagesEnd stages_end;
   const bool compensate = config_.depth.compensate_timing && dt_s > 0;
   // Before this pair is solved, the previous pair's velocity is the best guess (zero after a gap).
-  const MotionPrior prior = last_motion_.value_or(MotionPrior{});
+  const MotionPrior prior = last_pair_ ? motion_of(*last_pair_) : MotionPrior{};
   const bool windowed = config_.matching.window_px > 0 && prev.features.descriptors.type() == CV_8UC1 &&
                         curr.features.descriptors.type() == CV_8UC1;
   Status solved = match_and_fit(prev, curr, windowed ? &prior : nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
@@ -244,23 +250,27 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
         config_.covariance.timing_sigma_s >= 0 ? config_.covariance.timing_sigma_s : stamp_jitter_.offset_sigma_s();
     cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, inlier_prev_noise_, inlier_curr_noise_, inlier_cells_,
                                   fit_.T_prev_curr, timing_sigma_s, covariance_rng, cov);
-    if (cov_ok && dt_s > 0) {
-      const PairRate rate{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};
+  }
+  if (!cov_ok) {
+    r.times.covariance_ms = ms_since(t0);
+    return fail(Status::CovarianceFailed);
+  }
+  if (dt_s > 0) {
+    const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};  // before the latency terms
+    if (!paper_noise_) {
       const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)
                                                            : Matrix6d::Zero();
-      cov += config_.covariance.scale * latency_covariance(latency_, depth_response, rate, last_rate_);
-      last_rate_ = rate;
+      cov += config_.covariance.scale * latency_covariance(latency_, depth_response, own, last_pair_);
     }
+    last_pair_ = own;
   }
   r.times.covariance_ms = ms_since(t0);
-  if (!cov_ok) return fail(Status::CovarianceFailed);
 
   r.status = Status::Ok;
   r.inliers = static_cast<int>(fit_.inliers.size());
   r.inlier_threshold_m = fit_.threshold_m;
   r.T_prev_curr = fit_.T_prev_curr;
   r.covariance = cov;
-  if (dt_s > 0) last_motion_ = motion_from(fit_.T_prev_curr, dt_s);
   return r;
 }
 

@@ -1,8 +1,9 @@
 #pragma once
 // The per-pair half of the pipeline: match -> 3-D point pairs -> RANSAC -> covariance, on two
 // frames already through FrameExtractor. Its state lives as long as the pair stream: scratch
-// buffers sized once (no allocation per pair) and the last pair's velocity, the motion prior
-// for the colour/depth timing compensation of the next.
+// buffers sized once (no allocation per pair) and the last pair's rate: the motion prior for
+// the matching window and colour/depth timing compensation of the next, and the start of the
+// change of rate its latency terms see.
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -28,10 +29,7 @@ class PairEstimator {
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
-  void forget_motion() {
-    last_motion_.reset();
-    last_rate_.reset();
-  }
+  void forget_motion() { last_pair_.reset(); }
 
  private:
   // Matching (within the window window_prior predicts, or over all pairs when null), 3-D
@@ -58,11 +56,10 @@ class PairEstimator {
   std::vector<PointNoise> inlier_prev_noise_, inlier_curr_noise_;
   std::vector<std::uint16_t> inlier_cells_;  // image cell of each inlier (current frame)
   StampJitter stamp_jitter_;
-  // Velocity of the last good pair: the motion prior for timing compensation.
-  std::optional<MotionPrior> last_motion_;
-  // The last good pair's rate and covariance (before its latency terms), for the next's.
   LatencySigmas latency_;
-  std::optional<PairRate> last_rate_;
+  // The last good pair: its velocity is the motion prior for matching and timing
+  // compensation; its rate and covariance (before its latency terms) feed the next's.
+  std::optional<PairRate> last_pair_;
 };
 
 }  // namespace rgbdo
