@@ -89,18 +89,25 @@ TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
   const std::vector<TumImage> depth_images = read_tum_images(RGBDO_TEST_DATA_DIR, "depth.txt");
   ASSERT_EQ(recorded.size(), live.size()) << "live frames whose intervals match no run of recorded frames";
   OdometryPipeline from_live(config), from_replay(config);
-  size_t compared = 0;
+  size_t compared = 0, solved = 0, depthless = 0;
   for (size_t i = 0; i < live.size(); ++i) {
     // The same frames, pixel for pixel, in the same pairs: the same odometry. Each colour frame
     // with the depth image the live reader paired it with (on a loaded machine that can be
     // another than the recording's nearest: the reader pairs with what has arrived in time).
+    // A reader woken too late to find depth within 20 ms of its colour frame flags the frame
+    // NoDepth (as it must): the replay is given no depth for it either.
     TumFrameRef ref = seq.frames[recorded[i]];
-    const std::int64_t depth_since_first = live[i].t_depth_ns - live.front().t_colour_ns;
-    for (const TumImage& d : depth_images)
-      if (std::llabs(d.t_ns - seq.frames[recorded.front()].t_colour_ns - depth_since_first) <= 2000) {
-        ref.t_depth_ns = d.t_ns;
-        ref.depth_path = d.path;
-      }
+    if (live[i].status == Status::NoDepth) {
+      ++depthless;
+      ref.t_depth_ns.reset();
+    } else {
+      const std::int64_t depth_since_first = live[i].t_depth_ns - live.front().t_colour_ns;
+      for (const TumImage& d : depth_images)
+        if (std::llabs(d.t_ns - seq.frames[recorded.front()].t_colour_ns - depth_since_first) <= 2000) {
+          ref.t_depth_ns = d.t_ns;
+          ref.depth_path = d.path;
+        }
+    }
     const RgbdFrame replay = load_tum_frame(ref, config.depth.units_per_m, 640, 480);
     const auto a = from_live.process(live[i]);
     const auto b = from_replay.process(replay);
@@ -113,9 +120,15 @@ TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
     EXPECT_EQ(a->status, b->status) << "pair " << i;
     EXPECT_EQ(a->inliers, b->inliers) << "pair " << i;
     EXPECT_LT((a->T_prev_curr.matrix() - b->T_prev_curr.matrix()).cwiseAbs().maxCoeff(), 1e-9) << "pair " << i;
-    EXPECT_LT((a->covariance - b->covariance).cwiseAbs().maxCoeff(), 1e-9 * b->covariance.cwiseAbs().maxCoeff());
+    if (a->status != Status::Ok || b->status != Status::Ok) continue;  // a failed pair's covariance is NaN
+    ++solved;
+    EXPECT_LT((a->covariance - b->covariance).cwiseAbs().maxCoeff(), 1e-9 * b->covariance.cwiseAbs().maxCoeff())
+        << "pair " << i;
   }
   EXPECT_EQ(compared, live.size() - 1);
+  // Late wake-ups are rare even under load; most pairs must be solved ones compared in full.
+  EXPECT_LE(depthless, live.size() / 4) << "live frames flagged NoDepth";
+  EXPECT_GE(solved, live.size() / 2) << "solved pairs compared";
 }
 
 // Every depth frame of the recording (depth/, 41 of them: more than the associated pairs), as
