@@ -107,6 +107,27 @@ LiveRun run_live(const Config& config, const std::string& uri) {
   return run_live(config, uri, [](const LiveRun&) { return false; });
 }
 
+// A live frame the reader flagged NoDepth: woken too late on a loaded machine, it found no depth
+// image within 20 ms of the colour frame (and must not pair a farther one). Its depth time is
+// then its colour time.
+bool flagged_without_depth(const PairOutput& o) { return o.t_depth_ns == o.t_frame_ns; }
+
+// Every pair solves, except those with a frame the reader flagged NoDepth: those are flagged
+// NoDepth too, and rare even under load (at most a quarter of the frames).
+void expect_solved_unless_depth_came_late(const LiveRun& live) {
+  size_t late = 0;
+  bool previous_late = false;
+  for (const PairOutput& o : live.outputs) {
+    const bool this_late = flagged_without_depth(o);
+    late += this_late;
+    if (o.has_pair) {
+      EXPECT_EQ(o.result.status, this_late || previous_late ? Status::NoDepth : Status::Ok) << o.frame_problem;
+    }
+    previous_late = this_late;
+  }
+  EXPECT_LE(late, live.outputs.size() / 4) << "frames flagged NoDepth";
+}
+
 // Replays, from the recording on disk, exactly the frame pairs the live run formed, in the same
 // order (the motion window carries each pair's velocity to the next), each colour frame with the depth image the live reader
 // paired it with (on a loaded machine that can be another than the recording's nearest: the
@@ -131,6 +152,10 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
   for (const PairOutput& o : live.outputs) depth_time_of[o.t_frame_ns] = o.t_depth_ns;
   const auto recorded_frame = [&](std::int64_t t_colour_live_ns) {
     TumFrameRef ref = seq.frames[find_us(seq.frames, [](const TumFrameRef& f) { return f.t_colour_ns; }, t_colour_live_ns)];
+    if (depth_time_of.at(t_colour_live_ns) == t_colour_live_ns) {  // flagged_without_depth
+      ref.t_depth_ns.reset();
+      return load_tum_frame(ref, config.depth.units_per_m, 640, 480);
+    }
     const TumImage& depth =
         depth_images[find_us(depth_images, [](const TumImage& d) { return d.t_ns; }, depth_time_of.at(t_colour_live_ns))];
     ref.t_depth_ns = depth.t_ns;
@@ -175,7 +200,7 @@ TEST_P(RealtimeLive, GivesTheReplaysOdometryForEveryFramePair) {
   // fast as the host's: its lead grows with every frame), so every pair's latency is measured.
   EXPECT_EQ(live.stats.latency.ahead_of_clock(), 0u);
   EXPECT_EQ(live.stats.latency.count(), live.pairs().size());
-  for (const PairResult* p : live.pairs()) EXPECT_EQ(p->status, Status::Ok);
+  expect_solved_unless_depth_came_late(live);
   expect_same_as_replay(config, live);
 }
 
@@ -188,11 +213,10 @@ TEST(RealtimeFaults, ADroppedFrameIsCountedAndThePairSpansTheGap) {
   EXPECT_GE(live.stats.dropped_by_sensor, 3);
   EXPECT_EQ(accounted(live.stats), static_cast<std::uint64_t>(kFrames));
   // The pair across frames 4 -> 7 covers three recorded intervals (~0.1 s) and still solves.
+  expect_solved_unless_depth_came_late(live);
   bool spanned = false;
-  for (const PairResult* p : live.pairs()) {
-    EXPECT_EQ(p->status, Status::Ok);
+  for (const PairResult* p : live.pairs())
     if (p->t_curr_ns - p->t_prev_ns > 80'000'000) spanned = true;
-  }
   EXPECT_TRUE(spanned);
   expect_same_as_replay(config, live);
 }
@@ -202,7 +226,7 @@ TEST(RealtimeFaults, AStallShorterThanTheTimeoutLosesNothing) {
   const LiveRun live = run_live(config, virtual_uri("&stall=12:600"));
   EXPECT_EQ(accounted(live.stats), static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(live.stats.sensor_losses, 1);  // only the recording's end
-  for (const PairResult* p : live.pairs()) EXPECT_EQ(p->status, Status::Ok);
+  expect_solved_unless_depth_came_late(live);
   // The pair across the stall keeps the device's interval, the sensor's clock, not the 600 ms
   // of arrival: expect_same_as_replay checks every pair's interval against the recording's
   // (exactly, to the device clock's microsecond), whichever frames load made it skip.
