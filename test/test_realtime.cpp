@@ -110,7 +110,8 @@ LiveRun run_live(const Config& config, const std::string& uri) {
 // A live frame the reader flagged NoDepth: woken too late on a loaded machine, it found no depth
 // image within 20 ms of the colour frame (and must not pair a farther one). Its depth time is
 // then its colour time.
-bool flagged_without_depth(const PairOutput& o) { return o.t_depth_ns == o.t_frame_ns; }
+bool flagged_without_depth(std::int64_t t_colour_ns, std::int64_t t_depth_ns) { return t_depth_ns == t_colour_ns; }
+bool flagged_without_depth(const PairOutput& o) { return flagged_without_depth(o.t_frame_ns, o.t_depth_ns); }
 
 // Every pair solves, except those with a frame the reader flagged NoDepth: those are flagged
 // NoDepth too, and rare even under load (at most a quarter of the frames).
@@ -152,7 +153,7 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
   for (const PairOutput& o : live.outputs) depth_time_of[o.t_frame_ns] = o.t_depth_ns;
   const auto recorded_frame = [&](std::int64_t t_colour_live_ns) {
     TumFrameRef ref = seq.frames[find_us(seq.frames, [](const TumFrameRef& f) { return f.t_colour_ns; }, t_colour_live_ns)];
-    if (depth_time_of.at(t_colour_live_ns) == t_colour_live_ns) {  // flagged_without_depth
+    if (flagged_without_depth(t_colour_live_ns, depth_time_of.at(t_colour_live_ns))) {
       ref.t_depth_ns.reset();
       return load_tum_frame(ref, config.depth.units_per_m, 640, 480);
     }

@@ -290,7 +290,10 @@ function main() {
           r.convergedAfterSamples = estimator.sequence;
           if (opt.convergedFile) fs.writeFileSync(opt.convergedFile, `${estimator.offsetUs}\n`);
         }
-        if (opt.silentAfterAnswers !== null && r.answersUsed === opt.silentAfterAnswers) {
+        // Only the answer that makes the count: a later one not used (a slow program's answer
+        // to a request sent before we went quiet, rejected for its round trip) leaves the count
+        // where it was and must not start a second silence.
+        if (opt.silentAfterAnswers !== null && verdict === 'used' && r.answersUsed === opt.silentAfterAnswers) {
           silentUntilHeartbeats = r.programHeartbeats + opt.silentForHeartbeats;  // vanish for a while
           r.silentPeriods++;
         }
