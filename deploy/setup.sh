@@ -13,6 +13,10 @@
 #                           build, replay TUM_DIR (default: the bundled frames) and plot its
 #                           evaluation against ground truth into build/plots/ (error with +-1/3
 #                           sigma per axis, NEES per pair and per 1-s window, trajectories)
+#   deploy/setup.sh peer [TUM_DIR]
+#                           build, replay TUM_DIR and estimate its pairs again with OpenCV's
+#                           RgbdICPOdometry: how much of the error against ground truth both
+#                           share, and how much is ours (bench/peer_check.py)
 #   deploy/setup.sh deps    only install the dependencies
 #
 # Idempotent: re-running it re-uses the build directories under build/.
@@ -137,6 +141,15 @@ run_plots() {
   log "plots: build/plots/${name}_errors.png ${name}_nees.png ${name}_trajectory.png"
 }
 
+run_peer() {
+  local dir=${1:-test/data/fr1_xyz}
+  build build/release -DCMAKE_BUILD_TYPE=Release
+  mkdir -p build/peer
+  log "$dir: our odometry and OpenCV's RgbdICPOdometry, each against the ground truth and each other"
+  bench/peer_check.sh "$dir" deploy/config/tum-fr1.yaml build/release/rgbd-odometry \
+    build/release/bench/peer_odometry "build/peer/$(basename "$dir")"
+}
+
 run_benchmarks() {
   deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
   build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
@@ -156,5 +169,6 @@ case "$job" in
   test) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_tests ;;
   bench) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_benchmarks ;;
   plots) install_dependencies "${packages[@]}"; run_plots "${2:-}" ;;
-  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|deps" >&2; exit 2 ;;
+  peer) install_dependencies "${packages[@]}"; run_peer "${2:-}" ;;
+  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|peer [TUM_DIR]|deps" >&2; exit 2 ;;
 esac

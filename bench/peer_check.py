@@ -1,0 +1,204 @@
+#!/usr/bin/python3
+"""Which part of the error against ground truth is ours: a three-cornered hat with a peer.
+
+    bench/peer_check.py LOG.csv EVALUATION.csv PEER.csv
+    bench/peer_check.py --self-test
+
+LOG.csv and EVALUATION.csv are one run's --log and --evaluation files; PEER.csv is
+bench/peer_odometry's estimate of the same pairs (OpenCV's dense RgbdICPOdometry). Three
+estimates of each motion -- ours, the peer's and the motion capture's -- differ pairwise by
+e_ours - e_gt, e_peer - e_gt and e_ours - e_peer. If the three errors are independent, each
+one's mean square follows from the three differences (the "three-cornered hat" of clock
+comparison):
+
+    common = (|ours-gt|^2 + |peer-gt|^2 - |ours-peer|^2) / 2   the ground truth's own error,
+                                                               plus whatever the sensor gives
+                                                               both estimators alike (timing)
+    ours   = (|ours-gt|^2 + |ours-peer|^2 - |peer-gt|^2) / 2   our own error
+    peer   = (|peer-gt|^2 + |ours-peer|^2 - |ours-gt|^2) / 2
+
+(estimates: one may come out below 0 when it is small against the others). Reported per axis
+and along the eigen-directions of each pair's reported covariance, whitened by it, smallest
+first: there a covariance that covers our own error has `ours` <= 1, and `common` is what a
+check against this ground truth charges to us besides it.
+"""
+import csv
+import math
+import os
+import re
+import sys
+import tempfile
+
+import numpy as np
+
+AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
+
+
+def rotation_vector(qw, qx, qy, qz):
+    if qw < 0:
+        qw, qx, qy, qz = -qw, -qx, -qy, -qz
+    s = math.sqrt(qx * qx + qy * qy + qz * qz)
+    if s < 1e-15:
+        return [0.0, 0.0, 0.0]
+    angle = 2 * math.atan2(s, qw)
+    return [angle * qx / s, angle * qy / s, angle * qz / s]
+
+
+def key(t):
+    return round(float(t) * 1e6)  # the files write their stamps to the microsecond
+
+
+def read_rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def read_inputs(log_path, evaluation_path, peer_path):
+    """Pairs present, solved, in all three files: ours, peer (xi), e_ours, reported covariance."""
+    ours = {}
+    for r in read_rows(log_path):
+        if r["status"] != "ok":
+            continue
+        xi = [float(r[a]) for a in ("tx", "ty", "tz")]
+        xi += rotation_vector(float(r["qw"]), float(r["qx"]), float(r["qy"]), float(r["qz"]))
+        cov = np.array([[float(r[f"c{i}{j}"]) for j in range(6)] for i in range(6)])
+        ours[key(r["t_curr"])] = (np.array(xi), cov)
+    errors = {key(r["t_s"]): np.array([float(r["e_" + a]) for a in AXES]) for r in read_rows(evaluation_path)}
+    peer = {key(r["t_curr"]): np.array([float(r[a]) for a in AXES]) for r in read_rows(peer_path) if r["ok"] == "1"}
+    keys = sorted(k for k in ours if k in errors and k in peer and np.all(np.isfinite(errors[k])))
+    if not keys:
+        sys.exit(f"peer_check: no pair is in all of {log_path}, {evaluation_path} and {peer_path}")
+    xi = np.array([ours[k][0] for k in keys])
+    return xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]), np.array([ours[k][1] for k in keys])
+
+
+def three_cornered_hat(ours_gt, peer_gt):
+    """Mean squares (per column) of the common, our own and the peer's own error."""
+    ours_peer = ours_gt - peer_gt
+    a, b, c = (np.mean(x * x, axis=0) for x in (ours_gt, peer_gt, ours_peer))
+    return (a + b - c) / 2, (a + c - b) / 2, (b + c - a) / 2
+
+
+def whitened(vectors, covariances):
+    """Each vector in its covariance's eigen-basis, divided by the sd there, smallest first."""
+    out = np.empty_like(vectors)
+    for n, (v, cov) in enumerate(zip(vectors, covariances)):
+        lam, u = np.linalg.eigh(cov)  # ascending
+        out[n] = (u.T @ v) / np.sqrt(lam)
+    return out
+
+
+def read_allowance(evaluation_path):
+    """The ground-truth allowance the evaluation stated (m, rad), (0, 0) if none."""
+    with open(evaluation_path) as f:
+        for line in f:
+            m = re.search(r"allowance: ([0-9.eE+-]+) m, ([0-9.eE+-]+) rad", line)
+            if m:
+                return float(m.group(1)), float(m.group(2))
+    return 0.0, 0.0
+
+
+def allowance_along(covariances, allowance):
+    """Mean square of the allowance's sd along each whitened eigen-direction, smallest first."""
+    variance = np.array([allowance[0] ** 2] * 3 + [allowance[1] ** 2] * 3)
+    out = np.zeros(6)
+    for cov in covariances:
+        lam, u = np.linalg.eigh(cov)
+        out += (u * u).T @ variance / lam
+    return out / len(covariances)
+
+
+def analyse(log_path, evaluation_path, peer_path):
+    xi, peer, e_ours, cov = read_inputs(log_path, evaluation_path, peer_path)
+    e_peer = e_ours - (xi - peer)  # the program wrote e_ours = xi - xi_gt
+    per_axis = three_cornered_hat(e_ours, e_peer)
+    along = three_cornered_hat(whitened(e_ours, cov), whitened(e_peer, cov))
+    return len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, read_allowance(evaluation_path))
+
+
+def rms_text(mean_square, unit_scale):
+    return f"{unit_scale * math.sqrt(mean_square):6.2f}" if mean_square >= 0 else "   < 0"
+
+
+def report(log_path, evaluation_path, peer_path):
+    n, (e_ours, e_peer), per_axis, along, allowance = analyse(log_path, evaluation_path, peer_path)
+    print(f"{n} pairs solved by both, with ground truth")
+    print("rms per axis (mm, mrad):  ours-gt  peer-gt  ours-peer | common     ours     peer")
+    for i, a in enumerate(AXES):
+        d = [np.mean(x[:, i] ** 2) for x in (e_ours, e_peer, e_ours - e_peer)]
+        cols = "  ".join(rms_text(v, 1e3) for v in d)
+        hat = "   ".join(rms_text(p[i], 1e3) for p in per_axis)
+        print(f"  {a}                      {cols} | {hat}")
+    print("mean square along the reported covariance's eigen-directions, whitened (1 = covered):")
+    print("  direction (smallest first)    common     ours     peer | the evaluation's ground-truth allowance")
+    for i in range(6):
+        print(f"  {i}                          {along[0][i]:8.2f} {along[1][i]:8.2f} {along[2][i]:8.2f} | {allowance[i]:8.2f}")
+    over = [i for i in range(6) if along[1][i] > 1]
+    if over:
+        print("verdict: our own error exceeds the reported covariance along direction(s) " + ", ".join(map(str, over)))
+    else:
+        print("verdict: our own error is within the reported covariance along every direction")
+
+
+def self_test():
+    """Synthetic pairs with known common and own errors, through the same files and code."""
+    rng = np.random.default_rng(7)
+    n = 4000
+    true_common = np.array([0.8, 0.4, 0.3, 0.2, 0.1, 0.05])  # mean squares, whitened
+    true_ours = np.full(6, 1.0)
+    true_peer = np.array([3.0, 2.0, 1.0, 1.0, 0.5, 0.5])
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = [os.path.join(tmp, name) for name in ("log.csv", "evaluation.csv", "peer.csv")]
+        with open(paths[0], "w") as log, open(paths[1], "w") as ev, open(paths[2], "w") as peer:
+            log.write("t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw," +
+                      ",".join(f"c{i}{j}" for i in range(6) for j in range(6)) + "\n")
+            ev.write("# synthetic\nt_s," + ",".join("e_" + a for a in AXES) + "\n")
+            peer.write("t_prev,t_curr,ok," + ",".join(AXES) + "\n")
+            for k in range(n):
+                q, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+                sd = np.sort(np.exp(rng.uniform(np.log(1e-4), np.log(3e-3), 6)))  # eigh order: ascending
+                cov = q @ np.diag(sd * sd) @ q.T
+                in_basis = q * sd  # maps whitened draws into this pair's coordinates
+                truth = np.concatenate([rng.normal(0, 0.02, 3), rng.normal(0, 0.02, 3)])
+                common = in_basis @ rng.normal(0, np.sqrt(true_common))
+                ours = truth + common + in_basis @ rng.normal(0, np.sqrt(true_ours))
+                other = truth + common + in_basis @ rng.normal(0, np.sqrt(true_peer))
+                angle = np.linalg.norm(ours[3:])
+                axis = ours[3:] / angle
+                qv = np.concatenate([axis * math.sin(angle / 2), [math.cos(angle / 2)]])
+                t = 1000 + k / 30
+                log.write(f"{t - 1 / 30:.6f},{t:.6f},ok,100," + ",".join(f"{x:.12g}" for x in list(ours[:3]) + list(qv)) +
+                          "," + ",".join(f"{x:.12g}" for x in cov.ravel()) + "\n")
+                ev.write(f"{t:.6f}," + ",".join(f"{x:.12g}" for x in ours - truth) + "\n")
+                peer.write(f"{t - 1 / 30:.6f},{t:.6f},1," + ",".join(f"{x:.12g}" for x in other) + "\n")
+            peer.write(f"{t:.6f},{t + 1 / 30:.6f},0,nan,nan,nan,nan,nan,nan\n")  # a failed peer pair is skipped
+        count, _, _, along, allowance = analyse(*paths)
+    failures = []
+    if count != n:
+        failures.append(f"{count} pairs read, {n} written")
+    if np.any(allowance != 0):
+        failures.append(f"allowance {allowance} from a file that states none")
+    # Sampling error of a mean square over n pairs: ~sqrt(2/n) of the largest term involved.
+    for name, got, want in zip(("common", "ours", "peer"), along, (true_common, true_ours, true_peer)):
+        tolerance = 0.1 * max(want.max(), 1.0) + 0.05
+        for i in range(6):
+            if abs(got[i] - want[i]) > tolerance:
+                failures.append(f"{name} direction {i}: {got[i]:.3f}, expected {want[i]:.3f} +- {tolerance:.3f}")
+    if failures:
+        print("peer_check self-test FAILED:\n  " + "\n  ".join(failures))
+        return 1
+    print(f"peer_check self-test passed: {n} synthetic pairs, the common, own and peer mean squares recovered")
+    return 0
+
+
+def main():
+    if sys.argv[1:] == ["--self-test"]:
+        return self_test()
+    if len(sys.argv) != 4:
+        sys.exit(__doc__)
+    report(*sys.argv[1:])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
