@@ -25,11 +25,12 @@ check against this ground truth charges to us besides it.
 import csv
 import math
 import os
-import re
 import sys
 import tempfile
 
 import numpy as np
+
+from evaluation_csv import read_evaluation
 
 AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
 
@@ -54,7 +55,8 @@ def read_rows(path):
 
 
 def read_inputs(log_path, evaluation_path, peer_path):
-    """Pairs present, solved, in all three files: ours, peer (xi), e_ours, reported covariance."""
+    """Pairs present, solved, in all three files: ours, peer (xi), e_ours, reported covariance;
+    and the evaluation's ground-truth allowance."""
     ours = {}
     for r in read_rows(log_path):
         if r["status"] != "ok":
@@ -63,13 +65,15 @@ def read_inputs(log_path, evaluation_path, peer_path):
         xi += rotation_vector(float(r["qw"]), float(r["qx"]), float(r["qy"]), float(r["qz"]))
         cov = np.array([[float(r[f"c{i}{j}"]) for j in range(6)] for i in range(6)])
         ours[key(r["t_curr"])] = (np.array(xi), cov)
-    errors = {key(r["t_s"]): np.array([float(r["e_" + a]) for a in AXES]) for r in read_rows(evaluation_path)}
+    evaluation, allowance = read_evaluation(evaluation_path)
+    errors = {key(t): np.array([evaluation["e_" + a][n] for a in AXES]) for n, t in enumerate(evaluation["t_s"])}
     peer = {key(r["t_curr"]): np.array([float(r[a]) for a in AXES]) for r in read_rows(peer_path) if r["ok"] == "1"}
     keys = sorted(k for k in ours if k in errors and k in peer and np.all(np.isfinite(errors[k])))
     if not keys:
         sys.exit(f"peer_check: no pair is in all of {log_path}, {evaluation_path} and {peer_path}")
     xi = np.array([ours[k][0] for k in keys])
-    return xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]), np.array([ours[k][1] for k in keys])
+    return (xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]), np.array([ours[k][1] for k in keys]),
+            allowance)
 
 
 def three_cornered_hat(ours_gt, peer_gt):
@@ -88,16 +92,6 @@ def whitened(vectors, covariances):
     return out
 
 
-def read_allowance(evaluation_path):
-    """The ground-truth allowance the evaluation stated (m, rad), (0, 0) if none."""
-    with open(evaluation_path) as f:
-        for line in f:
-            m = re.search(r"allowance: ([0-9.eE+-]+) m, ([0-9.eE+-]+) rad", line)
-            if m:
-                return float(m.group(1)), float(m.group(2))
-    return 0.0, 0.0
-
-
 def allowance_along(covariances, allowance):
     """Mean square of the allowance's sd along each whitened eigen-direction, smallest first."""
     variance = np.array([allowance[0] ** 2] * 3 + [allowance[1] ** 2] * 3)
@@ -109,11 +103,11 @@ def allowance_along(covariances, allowance):
 
 
 def analyse(log_path, evaluation_path, peer_path):
-    xi, peer, e_ours, cov = read_inputs(log_path, evaluation_path, peer_path)
+    xi, peer, e_ours, cov, allowance = read_inputs(log_path, evaluation_path, peer_path)
     e_peer = e_ours - (xi - peer)  # the program wrote e_ours = xi - xi_gt
     per_axis = three_cornered_hat(e_ours, e_peer)
     along = three_cornered_hat(whitened(e_ours, cov), whitened(e_peer, cov))
-    return len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, read_allowance(evaluation_path))
+    return len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, allowance)
 
 
 def rms_text(mean_square, unit_scale):

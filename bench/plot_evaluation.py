@@ -9,7 +9,6 @@ per pair and over 1-s windows against the chi2(6) bounds) and OUT_PREFIX_traject
 (integrated estimate against ground truth). Debian's python3-matplotlib; nothing is computed
 here that the program did not write: the figures show its numbers.
 """
-import re
 import sys
 
 import matplotlib
@@ -18,35 +17,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from evaluation_csv import read_evaluation  # noqa: E402
+
 CHI2_6_95 = 12.5916  # upper 95 % bound of chi2(6): the gate
 CHI2_6_05 = 1.6354   # lower 5 % bound
-
-
-def read(path):
-    allowance = (0.0, 0.0)
-    header = None
-    rows = []
-    with open(path) as f:
-        for line in f:
-            if line.startswith("#"):
-                m = re.search(r"allowance: ([0-9.eE+-]+) m, ([0-9.eE+-]+) rad", line)
-                if m:
-                    allowance = (float(m.group(1)), float(m.group(2)))
-                continue
-            if header is None:
-                header = line.strip().split(",")
-                continue
-            rows.append([float(x) if x else np.nan for x in line.strip().split(",")])
-    if header is None or not rows:
-        sys.exit(f"plot_evaluation: {path} holds no evaluated pairs")
-    data = np.array(rows)
-    return {name: data[:, i] for i, name in enumerate(header)}, allowance
 
 
 def main():
     if len(sys.argv) not in (3, 4):
         sys.exit(__doc__)
-    d, (allow_t, allow_r) = read(sys.argv[1])
+    d, (allow_t, allow_r) = read_evaluation(sys.argv[1])
     prefix = sys.argv[2]
     title = sys.argv[3] if len(sys.argv) == 4 else sys.argv[1]
     t = d["t_s"] - d["t_s"][0]
