@@ -50,8 +50,45 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& path, const ch
   return m;
 }
 
+// What this program's configuration and calibration files look like, checked before OpenCV's
+// YAML reader sees either: that reader hangs for ever on some malformed files (a line of dashes
+// after an indented first entry, or in place of the document marker, or text after the marker
+// on its line: found by fuzz_config_file, the last in a calibration file), so what it cannot be
+// given is refused here. One document ("---" once, before the first entry), entries starting
+// at the beginning of a line, text without NUL bytes, at most 1 MB. `what` names the file in
+// the error: "config file" or "camera.calibration_file".
+void check_layout(const std::string& what, const std::string& path) {
+  constexpr std::uintmax_t kMaxBytes = 1 << 20;
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (ec) throw ConfigError(what + " '" + path + "' cannot be read: " + ec.message());
+  if (bytes > kMaxBytes) throw ConfigError(what + " '" + path + "' is larger than 1 MB: not a configuration");
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  int number = 0;
+  bool marker = false, entry = false;
+  const auto refuse = [&](const std::string& why) {
+    return ConfigError(what + " '" + path + "' line " + std::to_string(number) + ": " + why);
+  };
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find('\0') != std::string::npos) throw refuse("a NUL byte: not a text file");
+    if (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) {
+      if (line != "---" || marker || entry) throw refuse("'" + line.substr(0, 8) + "': one YAML document, '---' once before the entries");
+      marker = true;
+      continue;
+    }
+    const auto first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#' || (!entry && line.rfind("%YAML", 0) == 0)) continue;
+    if (!entry && first != 0) throw refuse("the first entry is indented; sections start at the line's beginning");
+    entry = true;
+  }
+}
+
 // Intrinsics from an OpenCV calibration file (calibrateCamera's usual output keys).
 void load_calibration_file(Config& c, const std::string& path) {
+  check_layout("camera.calibration_file", path);
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ);
@@ -85,39 +122,6 @@ void load_calibration_file(Config& c, const std::string& path) {
   if (h > 0) c.camera.height = h;
 }
 
-// What this program's configuration looks like, checked before OpenCV's YAML reader sees it:
-// that reader hangs for ever on some malformed files (a line of dashes after an indented first
-// entry, or in place of the document marker: found by fuzz_config_file), so what it cannot be
-// given is refused here. One document ("---" once, before the first entry), entries starting
-// at the beginning of a line, text without NUL bytes, at most 1 MB.
-void check_layout(const std::string& path) {
-  constexpr std::uintmax_t kMaxBytes = 1 << 20;
-  std::error_code ec;
-  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
-  if (ec) throw ConfigError("config file '" + path + "' cannot be read: " + ec.message());
-  if (bytes > kMaxBytes) throw ConfigError("config file '" + path + "' is larger than 1 MB: not a configuration");
-  std::ifstream in(path, std::ios::binary);
-  std::string line;
-  int number = 0;
-  bool marker = false, entry = false;
-  const auto refuse = [&](const std::string& why) {
-    return ConfigError("config file '" + path + "' line " + std::to_string(number) + ": " + why);
-  };
-  while (std::getline(in, line)) {
-    ++number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.find('\0') != std::string::npos) throw refuse("a NUL byte: not a text file");
-    if (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) {
-      if (line != "---" || marker || entry) throw refuse("'" + line.substr(0, 8) + "': one YAML document, '---' once before the entries");
-      marker = true;
-      continue;
-    }
-    const auto first = line.find_first_not_of(" \t");
-    if (first == std::string::npos || line[first] == '#' || (!entry && line.rfind("%YAML", 0) == 0)) continue;
-    if (!entry && first != 0) throw refuse("the first entry is indented; sections start at the line's beginning");
-    entry = true;
-  }
-}
 
 Config parse_config_file(const std::string& path) {
   cv::FileStorage fs;
@@ -171,7 +175,7 @@ Config load_config(const std::string& path) {
     throw ConfigError("config file '" + path + "' does not exist");
   // OpenCV's reader asserts on shapes it does not expect and lets standard exceptions out of
   // its parser (both found by fuzz_config_file): what they say is still about this file.
-  check_layout(path);
+  check_layout("config file", path);
   try {
     return parse_config_file(path);
   } catch (const ConfigError&) {
