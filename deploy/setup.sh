@@ -118,7 +118,7 @@ run_tests() {
   # libFuzzer: every parser of outside input, instrumented with ASan + UBSan, built by clang
   # (Debian's clang and its compiler-rt carry libFuzzer); the kept crash inputs replayed,
   # then each target fuzzed from its seed corpus for a fixed number of runs with a fixed seed
-  # (test/fuzz/CMakeLists.txt: the same inputs on every machine; ~40 s in all here).
+  # (test/fuzz/CMakeLists.txt; ~40 s in all here; what is explored varies a little between runs).
   log "building the fuzz targets (clang, libFuzzer, ASan + UBSan)"
   CC=clang CXX=clang++ cmake -S . -B build/fuzz -DRGBDO_WERROR=ON -DRGBDO_FUZZ=ON -DRGBDO_BUILD_TESTS=OFF \
     -DRGBDO_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null

@@ -1,6 +1,7 @@
 # MODE=replay: run FUZZER once over every file in INPUTS (a missing directory: nothing to do).
 # MODE=fuzz: copy INPUTS to WORK and fuzz from it for RUNS inputs with seed 1 (one process:
-# the same inputs on every machine, and a finding names its input).
+# a bounded run on every machine, and a finding names its input; what it explores still varies
+# a little from run to run, as libFuzzer is not fully deterministic).
 if(MODE STREQUAL "replay")
   file(GLOB inputs ${INPUTS}/*)
   if(NOT inputs)
