@@ -9,6 +9,7 @@
 // xi = (t [m], rotation vector [rad]) of T_prev_curr, the convention of the odometry log.
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <opencv2/rgbd.hpp>
 #include <optional>
 
@@ -41,8 +42,7 @@ int main(int argc, char** argv) {
     const cv::Ptr<cv::rgbd::RgbdICPOdometry> odometry = cv::rgbd::RgbdICPOdometry::create(
         K, static_cast<float>(config.depth.min_m), static_cast<float>(config.depth.max_m));
     std::printf("t_prev,t_curr,ok,tx,ty,tz,rx,ry,rz\n");
-    std::optional<rgbdo::RgbdFrame> prev;
-    cv::Mat prev_depth;
+    std::optional<rgbdo::RgbdFrame> prev;  // its depth_m already in OpenCV's form
     for (const auto& ref : seq.frames) {
       rgbdo::RgbdFrame f = rgbdo::load_tum_frame(ref, config.depth.units_per_m, cam.width, cam.height);
       if (f.status != rgbdo::Status::Ok) {
@@ -50,12 +50,12 @@ int main(int argc, char** argv) {
         prev.reset();
         continue;
       }
-      cv::Mat depth = depth_for_opencv(f.depth_m);
+      f.depth_m = depth_for_opencv(f.depth_m);
       if (prev) {
         // dst_p = Rt src_p with the current frame as the source: Rt is T_prev_curr.
         cv::Mat Rt;
         const cv::Mat all_prev(prev->gray.size(), CV_8UC1, cv::Scalar(255)), all_curr(f.gray.size(), CV_8UC1, cv::Scalar(255));
-        const bool ok = odometry->compute(f.gray, depth, all_curr, prev->gray, prev_depth, all_prev, Rt);
+        const bool ok = odometry->compute(f.gray, f.depth_m, all_curr, prev->gray, prev->depth_m, all_prev, Rt);
         rgbdo::Vector6d xi = rgbdo::Vector6d::Constant(std::numeric_limits<double>::quiet_NaN());
         if (ok) {
           Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -67,7 +67,6 @@ int main(int argc, char** argv) {
                     ok ? 1 : 0, xi(0), xi(1), xi(2), xi(3), xi(4), xi(5));
       }
       prev = std::move(f);
-      prev_depth = depth;
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "peer_odometry: %s\n", e.what());

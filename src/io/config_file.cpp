@@ -122,7 +122,6 @@ void load_calibration_file(Config& c, const std::string& path) {
   if (h > 0) c.camera.height = h;
 }
 
-
 Config parse_config_file(const std::string& path) {
   cv::FileStorage fs;
   try {
