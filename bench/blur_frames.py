@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""Motion-blurs a TUM sequence's colour frames as a longer exposure would: how the covariance
+follows blur, on real frames with real ground truth.
+
+    bench/blur_frames.py SOURCE_DIR OUT_DIR EXPOSURE_S
+
+Each colour frame is smeared along the image motion the ground truth gives at its stamp: the
+camera's velocity and turn rate in its own frame (TUM's poses are the colour camera's optical
+centre), projected at the image centre for a scene 1.5 m away (fr1's desk), times the
+exposure. The smear is a line kernel centred on the frame's stamp, so blur adds no delay. The
+depth images, index files and ground truth are linked or copied unchanged (the Kinect's depth
+is not a camera exposure). Prints the blur lengths in pixels.
+
+One blur per frame, the same over the whole image: it leaves out rolling shutter and the
+parallax between near and far points, so it is a stress test of the covariance's response to
+blur, not a model of a particular fast sequence.
+"""
+import os
+import sys
+
+import numpy as np
+from PIL import Image
+
+FOCAL_PX = 517.3       # fr1's colour camera
+SCENE_DEPTH_M = 1.5    # what the image centre sees on fr1's desk sequences
+RATE_HALF_SPAN_S = 0.02
+
+
+def read_groundtruth(path):
+    rows = [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
+    return np.array(rows, dtype=float)
+
+
+def rotation_matrix(q):
+    x, y, z, w = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def pose_at(gt, t):
+    """Position interpolated, orientation of the nearest sample (100 Hz: 5 ms at most)."""
+    position = np.array([np.interp(t, gt[:, 0], gt[:, i]) for i in (1, 2, 3)])
+    nearest = min(np.searchsorted(gt[:, 0], t), len(gt) - 1)
+    return position, rotation_matrix(gt[nearest, 4:8])
+
+
+def image_motion_px_per_s(gt, t):
+    """Image velocity at the centre: -f (v_x / Z + w_y), -f (v_y / Z - w_x), camera frame."""
+    p0, r0 = pose_at(gt, t - RATE_HALF_SPAN_S)
+    p1, r1 = pose_at(gt, t + RATE_HALF_SPAN_S)
+    v = r0.T @ (p1 - p0) / (2 * RATE_HALF_SPAN_S)
+    turn = r0.T @ r1
+    w = 0.5 * np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]])
+    w /= 2 * RATE_HALF_SPAN_S
+    return -FOCAL_PX * np.array([v[0] / SCENE_DEPTH_M + w[1], v[1] / SCENE_DEPTH_M - w[0]])
+
+
+def smear(image, motion_px):
+    """Mean of the image shifted along motion_px, centred: a line kernel of that length."""
+    length = float(np.linalg.norm(motion_px))
+    if length < 0.5:
+        return image
+    reach = int(np.ceil(length / 2)) + 1
+    padded = np.pad(image.astype(np.float32), ((reach, reach), (reach, reach), (0, 0)), mode="edge")
+    h, w = image.shape[:2]
+    total = np.zeros((h, w, image.shape[2]), np.float32)
+    steps = max(2, int(np.ceil(4 * length)))
+    for s in np.linspace(-0.5, 0.5, steps):
+        dx, dy = (int(round(c)) for c in s * motion_px)
+        total += padded[reach + dy:reach + dy + h, reach + dx:reach + dx + w]
+    return np.clip(total / steps + 0.5, 0, 255).astype(np.uint8)
+
+
+def main():
+    if len(sys.argv) != 4:
+        sys.exit(__doc__)
+    source, out, exposure_s = sys.argv[1], sys.argv[2], float(sys.argv[3])
+    source = os.path.abspath(source)
+    os.makedirs(os.path.join(out, "rgb"), exist_ok=True)
+    for name in ("rgb.txt", "depth.txt", "groundtruth.txt"):
+        with open(os.path.join(source, name), "rb") as f, open(os.path.join(out, name), "wb") as g:
+            g.write(f.read())
+    if not os.path.exists(os.path.join(out, "depth")):
+        os.symlink(os.path.join(source, "depth"), os.path.join(out, "depth"))
+    gt = read_groundtruth(os.path.join(source, "groundtruth.txt"))
+    lengths = []
+    for line in open(os.path.join(source, "rgb.txt")):
+        if not line.strip() or line.startswith("#"):
+            continue
+        stamp, name = line.split()[:2]
+        motion = image_motion_px_per_s(gt, float(stamp)) * exposure_s
+        lengths.append(np.linalg.norm(motion))
+        image = np.asarray(Image.open(os.path.join(source, name)).convert("RGB"))
+        Image.fromarray(smear(image, motion)).save(os.path.join(out, name))
+    print(f"{len(lengths)} frames blurred over {exposure_s * 1000:g} ms: blur length median "
+          f"{np.median(lengths):.1f} px, 90 % {np.percentile(lengths, 90):.1f} px, max {max(lengths):.1f} px")
+
+
+if __name__ == "__main__":
+    main()
