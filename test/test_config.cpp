@@ -98,6 +98,9 @@ TEST_F(ConfigFile, WhatOpenCvsReaderCannotTakeIsRefusedByLine) {
   expect_error_naming([&] { load_config(write("t.yaml", "%YAML:1.0\n---\ncamera:\n  fx: 500\n---\nseed: 2\n")); },
                       "line 5");
   expect_error_naming([&] { load_config(write("s.yaml", "%YAML:1.0\n---\ncamera: 5\n")); }, "s.yaml");
+  // A second directive line, taken for the first entry, let an indented one through.
+  expect_error_naming([&] { load_config(write("p.yaml", "%YAML:1.\n%\n x:3\nran-\n")); }, "p.yaml' line 3");
+  expect_error_naming([&] { load_config(write("q.yaml", "%YAML:1.0\n---\nseed: 2\n%\n")); }, "q.yaml' line 4");
 }
 
 TEST_F(ConfigFile, ACalibrationFileOpenCvsReaderCannotTakeIsRefusedByLine) {

@@ -54,8 +54,9 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& path, const ch
 // YAML reader sees either: that reader hangs for ever on some malformed files (a line of dashes
 // after an indented first entry, or in place of the document marker, or text after the marker
 // on its line: found by fuzz_config_file, the last in a calibration file), so what it cannot be
-// given is refused here. One document ("---" once, before the first entry), entries starting
-// at the beginning of a line, text without NUL bytes, at most 1 MB. `what` names the file in
+// given is refused here. One document ("---" once, before the first entry; '%' directives
+// only before it), entries starting at the beginning of a line, text without NUL bytes, at
+// most 1 MB. `what` names the file in
 // the error: "config file" or "camera.calibration_file".
 void check_layout(const std::string& what, const std::string& path) {
   constexpr std::uintmax_t kMaxBytes = 1 << 20;
@@ -80,7 +81,13 @@ void check_layout(const std::string& what, const std::string& path) {
       continue;
     }
     const auto first = line.find_first_not_of(" \t");
-    if (first == std::string::npos || line[first] == '#' || (!entry && line.rfind("%YAML", 0) == 0)) continue;
+    if (first == std::string::npos || line[first] == '#') continue;
+    // A directive ('%YAML:1.0' and the like) heads the document; it is not its first entry,
+    // which must still start at the line's beginning ('%' then an indented entry hung the reader).
+    if (line[0] == '%') {
+      if (marker || entry) throw refuse("a '%' directive inside the document; directives go before '---'");
+      continue;
+    }
     if (!entry && first != 0) throw refuse("the first entry is indented; sections start at the line's beginning");
     entry = true;
   }
