@@ -10,7 +10,7 @@ if [ $# -ne 5 ] && [ $# -ne 7 ]; then
   exit 2
 fi
 here=$(dirname "$0")
-rm -rf "$5"
+rm -rf "$5/blurred" "$5/sharp.evaluation.csv" "$5/blurred.evaluation.csv"
 mkdir -p "$5"
 "$here/blur_frames.py" "$1" "$5/blurred" "$4"
 for run in sharp blurred; do

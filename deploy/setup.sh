@@ -17,6 +17,10 @@
 #                           build, replay TUM_DIR and estimate its pairs again with OpenCV's
 #                           RgbdICPOdometry: how much of the error against ground truth both
 #                           share, and how much is ours (bench/peer_check.py)
+#   deploy/setup.sh blur [TUM_DIR [EXPOSURE_S]]
+#                           build, replay TUM_DIR as recorded and with its colour frames
+#                           motion-blurred over EXPOSURE_S (default 0.1) along their ground-truth
+#                           motion: does the covariance still cover the error (bench/blur_check.py)
 #   deploy/setup.sh deps    only install the dependencies
 #
 # Idempotent: re-running it re-uses the build directories under build/.
@@ -150,6 +154,15 @@ run_peer() {
     build/release/bench/peer_odometry "build/peer/$(basename "$dir")"
 }
 
+run_blur() {
+  local dir=${1:-test/data/fr1_xyz}
+  local exposure=${2:-0.1}
+  build build/release -DCMAKE_BUILD_TYPE=Release
+  log "$dir: as recorded and blurred over $exposure s, each against the ground truth"
+  bench/blur_check.sh "$dir" deploy/config/tum-fr1.yaml build/release/rgbd-odometry "$exposure" \
+    "build/blur/$(basename "$dir")"
+}
+
 run_benchmarks() {
   deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
   build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
@@ -170,5 +183,6 @@ case "$job" in
   bench) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_benchmarks ;;
   plots) install_dependencies "${packages[@]}"; run_plots "${2:-}" ;;
   peer) install_dependencies "${packages[@]}"; run_peer "${2:-}" ;;
-  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|peer [TUM_DIR]|deps" >&2; exit 2 ;;
+  blur) install_dependencies "${packages[@]}"; run_blur "${2:-}" "${3:-}" ;;
+  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|peer [TUM_DIR]|blur [TUM_DIR [EXPOSURE_S]]|deps" >&2; exit 2 ;;
 esac
