@@ -47,18 +47,23 @@ TEST(TumSequence, LoadsFrameInMetres) {
 }
 
 TEST(GroundTruth, InterpolatesBetweenSamplesAndRefusesGaps) {
-  StampedPose a, b, c;
-  a.t_ns = 0;
-  b.t_ns = 10'000'000;
-  b.pose.translation() = Eigen::Vector3d(1, 0, 0);
-  b.pose.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  c.t_ns = 1'000'000'000;
-  const GroundTruth gt({a, b, c});
+  // Sampled every 10 ms, then a 40 ms gap (more than three intervals: the capture lost the
+  // camera), then one of 0.93 s.
+  std::vector<StampedPose> poses(6);
+  const std::int64_t stamps_ms[] = {0, 10, 20, 30, 70, 1000};
+  for (size_t i = 0; i < poses.size(); ++i) poses[i].t_ns = stamps_ms[i] * 1'000'000;
+  poses[1].pose.translation() = Eigen::Vector3d(1, 0, 0);
+  poses[1].pose.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const GroundTruth gt(poses);
+  EXPECT_EQ(groundtruth_gap_ns(poses), 30'000'000);
   const auto mid = gt.at(5'000'000);
   ASSERT_TRUE(mid);
   EXPECT_NEAR(mid->translation().x(), 0.5, 1e-12);
   EXPECT_NEAR(Eigen::AngleAxisd(mid->linear()).angle(), 0.1, 1e-12);
-  EXPECT_FALSE(gt.at(500'000'000));  // inside a 0.99 s gap
+  EXPECT_TRUE(gt.at(25'000'000));
+  EXPECT_TRUE(gt.at(70'000'000));    // a sample itself, at the gap's end
+  EXPECT_FALSE(gt.at(50'000'000));   // inside the 40 ms gap
+  EXPECT_FALSE(gt.at(500'000'000));  // inside the 0.93 s gap
   EXPECT_FALSE(gt.at(-1));
 }
 

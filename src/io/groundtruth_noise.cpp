@@ -25,9 +25,7 @@ GroundTruthNoise estimate_groundtruth_noise(const std::vector<StampedPose>& pose
   const int n = static_cast<int>(poses.size());
   const int h = std::max(2, half_window);
   if (n < 2 * h + 1) return noise;
-  std::vector<double> intervals;
-  for (int i = 1; i < n; ++i) intervals.push_back(static_cast<double>(poses[i].t_ns - poses[i - 1].t_ns));
-  const double max_interval = 3 * median_of(intervals);
+  const auto max_interval = static_cast<double>(groundtruth_gap_ns(poses));
 
   std::vector<double> position_sq, rotation_sq;  // r^2 / (1 - leverage), one per coordinate
   const int m = 2 * h + 1;

@@ -97,13 +97,23 @@ GroundTruth read_groundtruth(const fs::path& file) {
 
 }  // namespace
 
-std::optional<Eigen::Isometry3d> GroundTruth::at(std::int64_t t_ns, std::int64_t max_gap_ns) const {
+std::int64_t groundtruth_gap_ns(const std::vector<StampedPose>& poses) {
+  if (poses.size() < 2) return 0;
+  std::vector<std::int64_t> intervals;
+  intervals.reserve(poses.size() - 1);
+  for (size_t i = 1; i < poses.size(); ++i) intervals.push_back(poses[i].t_ns - poses[i - 1].t_ns);
+  const auto mid = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
+  std::nth_element(intervals.begin(), mid, intervals.end());
+  return 3 * *mid;
+}
+
+std::optional<Eigen::Isometry3d> GroundTruth::at(std::int64_t t_ns) const {
   if (poses_.empty() || t_ns < poses_.front().t_ns || t_ns > poses_.back().t_ns) return std::nullopt;
   auto hi = std::lower_bound(poses_.begin(), poses_.end(), t_ns,
                              [](const StampedPose& p, std::int64_t t) { return p.t_ns < t; });
   if (hi->t_ns == t_ns) return hi->pose;
   auto lo = hi - 1;
-  if (hi->t_ns - lo->t_ns > max_gap_ns) return std::nullopt;
+  if (hi->t_ns - lo->t_ns > gap_ns_) return std::nullopt;
   const double a = static_cast<double>(t_ns - lo->t_ns) / static_cast<double>(hi->t_ns - lo->t_ns);
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   const Eigen::Quaterniond q0(lo->pose.linear()), q1(hi->pose.linear());

@@ -21,8 +21,8 @@ struct GroundTruthNoise {
   int samples = 0;        // samples with a full, gap-free neighbourhood
 };
 
-// half_window neighbours on each side; samples whose neighbourhood has a gap longer than
-// three times the median sample interval are skipped.
+// half_window neighbours on each side; samples whose neighbourhood has a gap
+// (groundtruth_gap_ns) are skipped.
 GroundTruthNoise estimate_groundtruth_noise(const std::vector<StampedPose>& poses, int half_window = 3);
 
 // What is added to the covariance of each compared motion, per axis (standard deviations).

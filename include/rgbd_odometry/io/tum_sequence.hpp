@@ -25,19 +25,27 @@ struct StampedPose {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // camera in the world frame
 };
 
+// Where motion capture lost the camera: samples further apart than three times the median
+// interval (30 ms at TUM's 100 Hz). Interpolating across such a gap is not a measurement:
+// fr1_xyz has one of 110 ms at 1305031108.84, during a turn, where the interpolated rotation
+// is off by several mrad, far beyond the samples' own noise.
+std::int64_t groundtruth_gap_ns(const std::vector<StampedPose>& poses);
+
 // Motion-capture ground truth, interpolated (linear + slerp) at arbitrary times.
 class GroundTruth {
  public:
   GroundTruth() = default;
-  explicit GroundTruth(std::vector<StampedPose> poses) : poses_(std::move(poses)) {}
+  explicit GroundTruth(std::vector<StampedPose> poses)
+      : poses_(std::move(poses)), gap_ns_(groundtruth_gap_ns(poses_)) {}
   bool empty() const { return poses_.empty(); }
   size_t size() const { return poses_.size(); }
   const std::vector<StampedPose>& poses() const { return poses_; }
-  // Empty when t lies outside the recording or in a gap longer than max_gap_ns.
-  std::optional<Eigen::Isometry3d> at(std::int64_t t_ns, std::int64_t max_gap_ns = 120'000'000) const;
+  // Empty when t lies outside the recording or in a gap (groundtruth_gap_ns).
+  std::optional<Eigen::Isometry3d> at(std::int64_t t_ns) const;
 
  private:
   std::vector<StampedPose> poses_;
+  std::int64_t gap_ns_ = 0;
 };
 
 struct TumSequence {
