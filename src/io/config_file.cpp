@@ -56,8 +56,7 @@ cv::Mat small_matrix(const cv::FileNode& node, const std::string& path, const ch
 // on its line: found by fuzz_config_file, the last in a calibration file), so what it cannot be
 // given is refused here. One document ("---" once, before the first entry; '%' directives
 // only before it), entries starting at the beginning of a line, text without NUL bytes, at
-// most 1 MB. `what` names the file in
-// the error: "config file" or "camera.calibration_file".
+// most 1 MB. `what` names the file in the error: "config file" or "camera.calibration_file".
 void check_layout(const std::string& what, const std::string& path) {
   constexpr std::uintmax_t kMaxBytes = 1 << 20;
   std::error_code ec;
