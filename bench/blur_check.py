@@ -15,10 +15,9 @@ import sys
 
 import numpy as np
 
-from evaluation_csv import read_evaluation
+from evaluation_csv import CHI2_6_95, read_evaluation
 
 AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
-CHI2_6_95 = 12.592
 
 
 def summary(path):

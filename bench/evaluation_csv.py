@@ -4,6 +4,8 @@ import sys
 
 import numpy as np
 
+CHI2_6_95 = 12.5916  # upper 95 % bound of chi2(6): the gate a joint 6-D NEES is held to
+
 
 def read_evaluation(path):
     """Columns by header name (NaN for an empty field) and the stated ground-truth allowance

@@ -17,9 +17,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from evaluation_csv import read_evaluation  # noqa: E402
+from evaluation_csv import CHI2_6_95, read_evaluation  # noqa: E402
 
-CHI2_6_95 = 12.5916  # upper 95 % bound of chi2(6): the gate
 CHI2_6_05 = 1.6354   # lower 5 % bound
 
 
