@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 
 #include "rgbd_odometry/io/tum_sequence.hpp"
@@ -65,6 +66,19 @@ TEST(GroundTruth, InterpolatesBetweenSamplesAndRefusesGaps) {
   EXPECT_FALSE(gt.at(50'000'000));   // inside the 40 ms gap
   EXPECT_FALSE(gt.at(500'000'000));  // inside the 0.93 s gap
   EXPECT_FALSE(gt.at(-1));
+}
+
+TEST(GroundTruth, GapThresholdOfTheLargestStampsDoesNotOverflow) {
+  // Two samples 9e18 ns apart (the largest stamps parse_timestamp_ns takes): three such
+  // intervals pass 64 bits, which UBSan flagged in fuzz_tum_sequence; with one interval
+  // there is no gap to find, so the threshold saturates and the midpoint interpolates.
+  std::vector<StampedPose> poses(2);
+  poses[1].t_ns = 9'000'000'000'000'000'000;
+  poses[1].pose.translation() = Eigen::Vector3d(2, 0, 0);
+  EXPECT_EQ(groundtruth_gap_ns(poses), std::numeric_limits<std::int64_t>::max());
+  const auto mid = GroundTruth(poses).at(4'500'000'000'000'000'000);
+  ASSERT_TRUE(mid);
+  EXPECT_NEAR(mid->translation().x(), 1.0, 1e-12);
 }
 
 class BrokenSequence : public ::testing::Test {
