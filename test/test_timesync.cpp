@@ -2,6 +2,7 @@
 // autopilot's heartbeat (autopilot_watch.hpp), with synthetic clocks of known offset.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "rgbd_odometry/link/autopilot_watch.hpp"
@@ -54,6 +55,23 @@ TEST(TimesyncEstimator, AnswersToOtherRequestsDuplicatesAndSlowOnesAreNotUsed) {
   EXPECT_EQ(e.estimate().rejected, 3u);
   e.reset();
   EXPECT_EQ(e.estimate().rejected, 0u);
+}
+
+TEST(TimesyncEstimator, ClockReadingsAtTheEndsOf64BitsAreRefusedNotOverflowed) {
+  // tc1 is whatever the wire carries: near -2^63 its offset from our clock does not fit 64
+  // bits (UBSan flagged the subtraction); near +2^63 the offset fits but our later times
+  // carried onto that clock do not.
+  constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min(), kMax = std::numeric_limits<std::int64_t>::max();
+  TimesyncEstimator e(10 * kMs);
+  e.note_request(100 * kMs);
+  EXPECT_EQ(e.add_answer(kMin + 5, 100 * kMs, 101 * kMs), TimesyncEstimator::Answer::ClockOutOfRange);
+  EXPECT_FALSE(e.estimate().valid);
+  EXPECT_EQ(e.estimate().rejected, 1u);
+  e.note_request(200 * kMs);
+  EXPECT_EQ(e.add_answer(kMax - 5, 200 * kMs, 201 * kMs), TimesyncEstimator::Answer::Used);
+  ASSERT_TRUE(e.to_autopilot_ns(200 * kMs));
+  EXPECT_EQ(*e.to_autopilot_ns(200 * kMs), kMax - 5 - kMs / 2);
+  EXPECT_FALSE(e.to_autopilot_ns(300 * kMs)) << "past 2^63 on the autopilot's clock";
 }
 
 mavlink::ReceivedFrame heartbeat(std::uint8_t sysid, std::uint8_t compid, std::uint8_t autopilot,

@@ -21,9 +21,15 @@ TimesyncEstimator::Answer TimesyncEstimator::add_answer(std::int64_t tc1_ns, std
     ++rejected_;
     return Answer::TooSlow;
   }
-  // ts1 + rtt/2 without overflowing: our clock is nanoseconds since boot, the autopilot's may
-  // be anything up to 2^63.
-  window_[next_sample_] = {tc1_ns - (ts1_ns + rtt_ns / 2), rtt_ns};
+  // ts1 + rtt/2 without overflowing: our clock is nanoseconds since boot. tc1 comes off the
+  // wire as any 64-bit value; one whose offset from our clock does not fit 64 bits (a negative
+  // tc1 near -2^63: a broken or hostile peer) is no clock reading.
+  std::int64_t offset_ns = 0;
+  if (__builtin_sub_overflow(tc1_ns, ts1_ns + rtt_ns / 2, &offset_ns)) {
+    ++rejected_;
+    return Answer::ClockOutOfRange;
+  }
+  window_[next_sample_] = {offset_ns, rtt_ns};
   next_sample_ = (next_sample_ + 1) % kWindow;
   window_size_ = std::min(window_size_ + 1, kWindow);
   ++samples_;
@@ -45,8 +51,10 @@ TimesyncEstimate TimesyncEstimator::estimate() const {
 
 std::optional<std::int64_t> TimesyncEstimator::to_autopilot_ns(std::int64_t time_ns) const {
   const TimesyncEstimate e = estimate();
-  if (!e.valid) return std::nullopt;
-  return time_ns + e.offset_ns;
+  std::int64_t autopilot_ns = 0;
+  // An autopilot clock near 2^63 (tc1 is taken as it comes) can put the sum past 64 bits.
+  if (!e.valid || __builtin_add_overflow(time_ns, e.offset_ns, &autopilot_ns)) return std::nullopt;
+  return autopilot_ns;
 }
 
 void TimesyncEstimator::reset() {

@@ -16,7 +16,8 @@
 // 0.4 ms; the window is short to keep that small.
 //
 // Answers that are not to one of our recent requests (ts1 unknown: another system's request,
-// a duplicate, a stale reply) or whose round trip exceeds max_rtt_ns are not used.
+// a duplicate, a stale reply), whose round trip exceeds max_rtt_ns or whose tc1 is so far from
+// our clock that the offset does not fit 64 bits are not used.
 // Not thread-safe: the owner guards it.
 #include <array>
 #include <cstddef>
@@ -30,7 +31,7 @@ struct TimesyncEstimate {
   std::int64_t offset_ns = 0;  // autopilot clock - our clock
   std::int64_t rtt_ns = 0;     // round trip of the sample the estimate comes from (error <= rtt/2)
   std::uint64_t samples = 0;   // answers used, since the start (or the last reset)
-  std::uint64_t rejected = 0;  // answers not to our requests, or too slow
+  std::uint64_t rejected = 0;  // answers not to our requests, too slow, or off any clock
 };
 
 class TimesyncEstimator {
@@ -41,11 +42,12 @@ class TimesyncEstimator {
   explicit TimesyncEstimator(std::int64_t max_rtt_ns) : max_rtt_ns_(max_rtt_ns) {}
 
   void note_request(std::int64_t ts1_ns);
-  enum class Answer { Used, NotOurs, TooSlow };
+  enum class Answer { Used, NotOurs, TooSlow, ClockOutOfRange };
   // An answer (tc1 != 0) that arrived at now_ns, our clock.
   Answer add_answer(std::int64_t tc1_ns, std::int64_t ts1_ns, std::int64_t now_ns);
   TimesyncEstimate estimate() const;
-  // Our clock's time_ns on the autopilot's clock, once there is an estimate.
+  // Our clock's time_ns on the autopilot's clock, once there is an estimate (and the result
+  // fits 64 bits).
   std::optional<std::int64_t> to_autopilot_ns(std::int64_t time_ns) const;
   // A different autopilot: its clock has nothing to do with the old one's.
   void reset();
