@@ -21,6 +21,9 @@
 #                           build, replay TUM_DIR as recorded and with its colour frames
 #                           motion-blurred over EXPOSURE_S (default 0.1) along their ground-truth
 #                           motion: does the covariance still cover the error (bench/blur_check.py)
+#   deploy/setup.sh fuzz-sweep [FIRST [LAST]]
+#                           the test command's bounded fuzz runs again with seeds FIRST..LAST
+#                           (default 2..13): more of what CI's one seed may reach (~10 min)
 #   deploy/setup.sh deps    only install the dependencies
 #
 # Idempotent: re-running it re-uses the build directories under build/.
@@ -123,13 +126,35 @@ run_tests() {
   # (Debian's clang and its compiler-rt carry libFuzzer); the kept crash inputs replayed,
   # then each target fuzzed from its seed corpus for a fixed number of runs with a fixed seed
   # (test/fuzz/CMakeLists.txt; ~40 s in all here; what is explored varies a little between runs).
+  build_fuzzers
+  log "fuzzing: regression inputs, then a bounded run of every target"
+  (cd build/fuzz && UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j "$jobs")
+}
+
+build_fuzzers() {
   log "building the fuzz targets (clang, libFuzzer, ASan + UBSan)"
   CC=clang CXX=clang++ cmake -S . -B build/fuzz -DRGBDO_WERROR=ON -DRGBDO_FUZZ=ON -DRGBDO_BUILD_TESTS=OFF \
     -DRGBDO_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
   cmake --build build/fuzz -j "$jobs" --target \
     fuzz_config_file fuzz_config_overrides fuzz_tum_sequence fuzz_uris fuzz_images fuzz_mavlink
-  log "fuzzing: regression inputs, then a bounded run of every target"
-  (cd build/fuzz && UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j "$jobs")
+}
+
+# The test command's bounded runs again, with seeds FIRST..LAST: the fixed seed fixes the run
+# count, not what libFuzzer explores, and CI once reached an input two runs here had not. It
+# stops at the first finding, whose input stays in build/fuzz/test/fuzz/work/TARGET/artifacts/.
+run_fuzz_sweep() {
+  local first=${1:-2} last=${2:-13}
+  if [[ ! $first =~ ^[0-9]+$ || ! $last =~ ^[0-9]+$ ]]; then
+    echo "fuzz-sweep: seeds must be whole numbers (got '$first' '$last')" >&2
+    exit 2
+  fi
+  build_fuzzers
+  local seed
+  for ((seed = first; seed <= last; seed++)); do
+    log "fuzzing every target with seed $seed"
+    (cd build/fuzz && RGBDO_FUZZ_SEED=$seed UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      ctest --output-on-failure -j "$jobs" -R _bounded_run)
+  done
 }
 
 run_plots() {
@@ -184,5 +209,6 @@ case "$job" in
   plots) install_dependencies "${packages[@]}"; run_plots "${2:-}" ;;
   peer) install_dependencies "${packages[@]}"; run_peer "${2:-}" ;;
   blur) install_dependencies "${packages[@]}"; run_blur "${2:-}" "${3:-}" ;;
-  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|peer [TUM_DIR]|blur [TUM_DIR [EXPOSURE_S]]|deps" >&2; exit 2 ;;
+  fuzz-sweep) install_dependencies "${packages[@]}" "${cross_packages[@]}"; run_fuzz_sweep "${2:-}" "${3:-}" ;;
+  *) echo "usage: deploy/setup.sh demo|test|bench|plots [TUM_DIR]|peer [TUM_DIR]|blur [TUM_DIR [EXPOSURE_S]]|fuzz-sweep [FIRST [LAST]]|deps" >&2; exit 2 ;;
 esac
