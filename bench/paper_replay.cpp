@@ -1,6 +1,6 @@
 // The straightforward reproduction of the paper (paper_reproduction.hpp) as a whole program
 // over a TUM sequence, PNG decoding included: the other side of the whole-process comparison
-// in README "Accuracy and speed" (both pinned to one core with taskset).
+// in bench/README.md (both pinned to one core with taskset).
 //   paper_replay TUM_DIR CONFIG.yaml
 #include <cstdio>
 

@@ -1,5 +1,5 @@
 // A second estimate of every pair, made independently of ours, for the consistency check of
-// bench/peer_check.py (README "Covariance"): OpenCV's RgbdICPOdometry (opencv_contrib rgbd:
+// bench/peer_check.py (bench/README.md): OpenCV's RgbdICPOdometry (opencv_contrib rgbd:
 // dense photometric and point-to-plane alignment, no features) on the same TUM frames, with the
 // same colour/depth association and intrinsics as the program. A diagnostic, not the product.
 //

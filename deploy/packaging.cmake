@@ -9,6 +9,8 @@ install(FILES deploy/config/tum-fr1.yaml deploy/config/xtion.yaml DESTINATION ${
 # The virtual sensor, where OpenNI2 looks for drivers: `--source openni://rgbdo-virtual:DIR`.
 install(TARGETS RgbdoVirtualSensor LIBRARY DESTINATION lib/${CMAKE_LIBRARY_ARCHITECTURE}/OpenNI2/Drivers)
 install(FILES README.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rgbd-odometry)
+# The autopilot set-up (PX4, ArduPilot) and the deploy notes, beside the user's guide.
+install(FILES deploy/README.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rgbd-odometry RENAME DEPLOY.md)
 
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME rgbd-odometry)

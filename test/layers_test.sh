@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The layers of src/ and include/rgbd_odometry/ include only what they may (README "Where
-# things live"). The linker already refuses a library that calls into a layer it does not
+# The layers of src/ and include/rgbd_odometry/ include only what they may (src/README.md).
+# The linker already refuses a library that calls into a layer it does not
 # link; this also catches headers: a thread or socket header in the math layer, OpenCV in the
 # wire layer, a layer reaching up into one above it.
 #   layers_test.sh REPO

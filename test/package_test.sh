@@ -33,6 +33,7 @@ expect_file lib/udev/rules.d/60-rgbd-odometry.rules 644
 expect_file usr/lib/sysusers.d/rgbd-odometry.conf 644
 expect_file usr/share/rgbd-odometry/config/tum-fr1.yaml 644
 expect_file usr/share/doc/rgbd-odometry/README.md 644
+expect_file usr/share/doc/rgbd-odometry/DEPLOY.md 644
 driver=$(find "$root/usr/lib" -path '*/OpenNI2/Drivers/libRgbdoVirtualSensor.so.0' | head -n 1)
 [ -n "$driver" ] || fail "the virtual sensor driver is not in an OpenNI2/Drivers directory"
 dpkg-deb -f "$deb" Depends | grep -q libopenni2-0 || fail "Depends lacks the OpenNI2 runtime"

@@ -3,7 +3,7 @@
 // counting forwards to glibc's own, then replays the bundled real frames: after warm-up,
 // the pair stage (matching, back-projection, RANSAC, covariance) and the integration must
 // not allocate at all. What feature extraction (OpenCV's detector, undistortPoints) still
-// allocates is measured and reported, not asserted (README "Allocations").
+// allocates is measured and reported, not asserted (src/README.md).
 //
 // Not built with the sanitizers: AddressSanitizer owns malloc there.
 #include <gtest/gtest.h>

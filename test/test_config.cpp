@@ -42,7 +42,7 @@ TEST(Config, DefaultsAreThePapersTable1) {
   EXPECT_EQ(c.ransac.max_iterations, 200);
   EXPECT_EQ(c.covariance.perturbations, 100);
   EXPECT_DOUBLE_EQ(c.covariance.depth_noise_coeff, 1.425e-3);
-  // No factor fitted to a recording: the noise model as it stands (README "Covariance you can fuse").
+  // No factor fitted to a recording: the noise model as it stands (src/pipeline/README.md).
   EXPECT_EQ(c.covariance.model, "physical");
   EXPECT_DOUBLE_EQ(c.covariance.scale, 1.0);
   EXPECT_NO_THROW(validate(c));

@@ -54,13 +54,20 @@ int wait_exit(pid_t pid) {
   return -1;
 }
 
-int run_program(const std::string& link, const fs::path& log, std::string& output) {
+// The message sets: ODOMETRY (PX4, ArduPilot), or VISION_POSITION_DELTA alone (ArduPilot's
+// body odometry, composed over at least 50 ms): never both, which EKF3 would fuse twice.
+const std::vector<std::string> kOdometry{};
+const std::vector<std::string> kDeltas{"link.odometry=false", "link.vision_position_delta=true",
+                                       "link.delta_min_interval_ms=50"};
+
+int run_program(const std::string& link, const fs::path& log, std::string& output,
+                const std::vector<std::string>& messages = kOdometry) {
   RunOptions o;
   o.source = std::string("tum:") + RGBDO_TEST_DATA_DIR;
   o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
   o.log_path = log.string();
   o.link = link;
-  o.overrides = {"link.vision_position_delta=true"};
+  o.overrides = messages;
   o.quiet = true;
   std::ostringstream out, err;
   const int rc = run_odometry(o, out, err);
@@ -68,10 +75,10 @@ int run_program(const std::string& link, const fs::path& log, std::string& outpu
   return rc;
 }
 
-int check(const fs::path& decoded, const fs::path& log, std::string& report) {
+int check(const fs::path& decoded, const fs::path& log, std::string& report, const std::string& messages = "") {
   const fs::path out = decoded.parent_path() / "check.txt";
   const std::string cmd = "node " + kCheckDir + "/check.mjs --decoded " + decoded.string() + " --log " + log.string() +
-                          " --expect-vpd --velocity-frame current --jacobians exact > " + out.string() + " 2>&1";
+                          " " + messages + " --velocity-frame current --jacobians exact > " + out.string() + " 2>&1";
   const int rc = std::system(cmd.c_str());
   std::ifstream in(out);
   report.assign(std::istreambuf_iterator<char>(in), {});
@@ -109,16 +116,63 @@ TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
   ::tcgetattr(master, &raw);
   ::cfmakeraw(&raw);
   ::tcsetattr(master, TCSANOW, &raw);
-  const pid_t decoder = start_decoder({"--fd", "3", "--ready-file", (dir / "ready").string(), "--count",
-                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
-                                       (dir / "decoded.jsonl").string()},
+  const pid_t decoder = start_decoder({"--fd", "3", "--ready-file", (dir / "ready").string(), "--timeout-ms", "10000",
+                                       "--out", (dir / "decoded.jsonl").string()},
                                       master);
   ::close(master);  // the decoder has its own copy
   ASSERT_FALSE(wait_for_ready(dir / "ready").empty());
   std::string output;
-  ASSERT_EQ(run_program(std::string("serial://") + slave_path + ":921600", dir / "odometry.csv", output), 0) << output;
+  ASSERT_EQ(run_program(std::string("serial://") + slave_path + ":921600", dir / "odometry.csv", output, kDeltas), 0)
+      << output;
   ::close(slave);
-  EXPECT_EQ(wait_exit(decoder), 0) << "the decoder met a bad frame or too few messages";
+  EXPECT_EQ(wait_exit(decoder), 0) << "the decoder met a bad frame or the port did not close";
+  std::string report;
+  EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report, "--vpd-only --delta-min-ms 50"), 0) << report;
+  // 39 pairs at ~33 ms: every delta spans two pairs, 66 ms, above EKF3's 50-ms floor.
+  EXPECT_NE(report.find("\"visionPositionDelta\":19"), std::string::npos) << report;
+}
+
+// GIVEN a recording that lists one colour frame twice, WHEN replayed over UDP, THEN the
+// repeat is logged as stamp_not_increasing and counted, never paired as an ok pair with zero
+// dt nor sent: every ODOMETRY's time_usec is after the one before (check.mjs asserts it).
+TEST(FlightLinkDecoded, AFrameListedTwiceIsFlaggedAndNeverSent) {
+  const ScratchDir scratch_dir = scratch("duplicate");
+  const fs::path& dir = scratch_dir.path();
+  const fs::path recording = dir / "recording";
+  fs::create_directories(recording);
+  for (const char* item : {"rgb", "depth", "depth.txt", "groundtruth.txt"})
+    fs::create_symlink(fs::path(RGBDO_TEST_DATA_DIR) / item, recording / item);
+  {
+    std::ifstream in(fs::path(RGBDO_TEST_DATA_DIR) / "rgb.txt");
+    std::ofstream out(recording / "rgb.txt");
+    int frame = 0;
+    for (std::string line; std::getline(in, line);) {
+      out << line << "\n";
+      if (!line.empty() && line[0] != '#' && ++frame == 10) out << line << "\n";  // the 10th frame twice
+    }
+  }
+  const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
+                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
+                                       (dir / "decoded.jsonl").string()},
+                                      -1);
+  const std::string ready = wait_for_ready(dir / "ready");
+  ASSERT_NE(ready.rfind(':'), std::string::npos) << "decoder not ready: '" << ready << "'";
+  RunOptions o;
+  o.source = "tum:" + recording.string();
+  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
+  o.log_path = (dir / "odometry.csv").string();
+  o.link = "udp://127.0.0.1:" + ready.substr(ready.rfind(':') + 1);
+  o.quiet = true;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_odometry(o, out, err), 0) << err.str();
+  EXPECT_EQ(wait_exit(decoder), 0);
+  std::ifstream log(dir / "odometry.csv");
+  int rows = 0, flagged = 0;
+  for (std::string line; std::getline(log, line); ++rows) flagged += line.find(",stamp_not_increasing,") != std::string::npos;
+  EXPECT_EQ(rows, kPairs + 2) << "the header, 39 pairs and the flagged repeat";
+  EXPECT_EQ(flagged, 1);
+  EXPECT_NE(out.str().find("39 pairs, 39 ok"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("1 dropped for a capture time not after the previous frame's"), std::string::npos) << out.str();
   std::string report;
   EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
 }

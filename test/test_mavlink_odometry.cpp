@@ -404,7 +404,7 @@ TEST(MavlinkOdometry, NothingBeforeTheFirstPairAndStandby) {
   EXPECT_EQ(h.mavlink_version, 3);
 }
 
-TEST(MavlinkOdometry, FailedPairKeepsPoseAndSaysSoAndRecoveryIncrementsResetOnce) {
+TEST(MavlinkOdometry, FailedPairCarriesNoPoseAndRecoveryIncrementsResetOnce) {
   OdometryMessageBuilder builder;
   const Matrix6d S = diagonal_covariance(0.003, 0.002);
   builder.add(pair(0, transform({0, 0, 0.05}, {0, 0.01, 0}), S));
@@ -418,12 +418,11 @@ TEST(MavlinkOdometry, FailedPairKeepsPoseAndSaysSoAndRecoveryIncrementsResetOnce
   for (int k = 2; k < 4; ++k) {
     builder.add(failed_pair(k));
     const auto o = *builder.odometry();
-    // THEN the pose and its covariance stay, the velocities are unknown, quality says failed
-    EXPECT_EQ(o.x, good.x);
-    EXPECT_EQ(o.y, good.y);
-    EXPECT_EQ(o.z, good.z);
-    EXPECT_EQ(o.q, good.q);
-    EXPECT_EQ(o.pose_covariance, good.pose_covariance);
+    // THEN no pose at all (PX4 at EKF2_EV_QMIN 0 would fuse a finite one, the last pose, as a
+    // frozen vehicle), the velocities unknown, quality says failed
+    EXPECT_TRUE(std::isnan(o.x) && std::isnan(o.y) && std::isnan(o.z));
+    for (const float c : o.q) EXPECT_TRUE(std::isnan(c));
+    for (const float c : o.pose_covariance) EXPECT_TRUE(std::isnan(c));
     EXPECT_TRUE(std::isnan(o.vx) && std::isnan(o.vy) && std::isnan(o.vz));
     EXPECT_TRUE(std::isnan(o.rollspeed) && std::isnan(o.pitchspeed) && std::isnan(o.yawspeed));
     for (const float c : o.velocity_covariance) EXPECT_TRUE(std::isnan(c));
@@ -441,6 +440,8 @@ TEST(MavlinkOdometry, FailedPairKeepsPoseAndSaysSoAndRecoveryIncrementsResetOnce
   EXPECT_TRUE(builder.vision_position_delta());
   EXPECT_EQ(builder.heartbeat().system_status, mavlink::kMavStateActive);
   EXPECT_FALSE(std::isnan(builder.odometry()->vx));
+  // and the pose goes on from the last one sent, one step further: the failures moved nothing
+  EXPECT_NEAR(builder.odometry()->x, 3 * good.x / 2, 1e-5);
   builder.add(pair(5, transform({0, 0, 0.05}, {0, 0.01, 0}), S));
   EXPECT_EQ(builder.odometry()->reset_counter, 1);
 }
@@ -456,6 +457,38 @@ TEST(MavlinkOdometry, OkPairWithUnusableNumbersIsSentAsFailed) {
   builder.add(backwards);
   EXPECT_EQ(builder.odometry()->quality, -1);
   EXPECT_FALSE(builder.vision_position_delta());
+}
+
+// GIVEN deltas composed over at least 50 ms (ArduPilot's EKF3 drops closer ones), WHEN pairs
+// of 33 ms come, THEN every second pair sends one delta of both motions with the summed
+// interval, and a failed pair starts the composition again.
+TEST(MavlinkOdometry, DeltasAreComposedOverTheMinimumInterval) {
+  MavlinkOdometryConfig config;
+  config.delta_min_interval_s = 0.05;
+  OdometryMessageBuilder builder(config);
+  const Matrix6d S = diagonal_covariance(0.003, 0.002);
+  const Eigen::Isometry3d step = transform({0.01, 0, 0.05}, {0, 0.02, 0});
+  builder.add(pair(0, step, S));
+  EXPECT_FALSE(builder.vision_position_delta()) << "33 ms: below 50";
+  builder.add(pair(1, step, S));
+  const auto d = builder.vision_position_delta();
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->time_delta_usec, static_cast<std::uint64_t>((pair(1, step, S).t_curr_ns - pair(0, step, S).t_prev_ns) / 1000));
+  // The two body motions composed: the same as the body pose after them (it started at identity).
+  const Eigen::Isometry3d& T = builder.pose();
+  const Eigen::Vector3d r = rotation_vector(T.linear()), t = T.linear().transpose() * T.translation();
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(d->angle_delta[static_cast<size_t>(i)], r[i], 1e-6);
+    EXPECT_NEAR(d->position_delta[static_cast<size_t>(i)], t[i], 1e-6);
+  }
+  // A second delta needs two more pairs; a failure in between starts again.
+  builder.add(pair(2, step, S));
+  EXPECT_FALSE(builder.vision_position_delta());
+  builder.add(failed_pair(3));
+  builder.add(pair(4, step, S));
+  EXPECT_FALSE(builder.vision_position_delta()) << "the pair before the failure is not part of it";
+  builder.add(pair(5, step, S));
+  EXPECT_TRUE(builder.vision_position_delta());
 }
 
 TEST(MavlinkOdometry, SensorResetIncrementsAndTheCounterWraps) {
@@ -514,7 +547,7 @@ TEST(MavlinkOdometry, FirstPairFailedThenRecoveryIsAReset) {
   const auto o = builder.odometry();
   ASSERT_TRUE(o);
   EXPECT_EQ(o->quality, -1);
-  EXPECT_EQ(o->x, 0.f);
+  EXPECT_TRUE(std::isnan(o->x));
   EXPECT_EQ(builder.heartbeat().system_status, mavlink::kMavStateCritical);
   builder.add(pair(1, transform({0, 0, 0.05}, {0, 0, 0}), diagonal_covariance(0.003, 0.002)));
   EXPECT_EQ(builder.reset_counter(), 1);

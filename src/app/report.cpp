@@ -77,8 +77,9 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   for (const auto& [word, n] : s.failures) out << " (" << word << ": " << n << ")";
   out << "\n";
   out << "  frames: " << run.frames << " processed, " << run.skipped << " skipped (processing behind), "
-      << run.dropped_by_sensor << " dropped by the sensor; sensor lost " << run.sensor_losses << " times, re-opened "
-      << run.reopens << " times\n";
+      << run.dropped_by_sensor << " dropped by the sensor, " << run.stamp_not_increasing
+      << " dropped for a capture time not after the previous frame's; sensor lost " << run.sensor_losses
+      << " times, re-opened " << run.reopens << " times\n";
   if (run.latency.count() > 0)
     out << std::fixed << std::setprecision(2) << "  latency capture to output: median " << run.latency.quantile_ms(0.5)
         << " ms, p99 " << run.latency.quantile_ms(0.99) << " ms, max " << run.latency.max_ms() << " ms ("

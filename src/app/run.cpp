@@ -16,6 +16,7 @@
 #include "rgbd_odometry/io/evaluate.hpp"
 #include "rgbd_odometry/io/odometry_log.hpp"
 #include "rgbd_odometry/link/flight_link.hpp"
+#include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/integrate.hpp"
 #include "rgbd_odometry/runtime/realtime.hpp"
 #include "rgbd_odometry/sensor/frame_feed.hpp"
@@ -150,6 +151,13 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
         return;
       }
       const PairResult& r = item.result;
+      if (PairEstimator::dropped_frame(r)) {
+        // Logged and said, nothing else: no pose, no message, no evaluation over no time.
+        if (log) log->write(r);
+        err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_host_ns())
+            << " dropped: its capture time is not after the previous frame's\n";
+        return;
+      }
       if (r.status == Status::Ok) {
         integrator.add(r.T_prev_curr);
         total.detect_ms += r.times.detect_ms;

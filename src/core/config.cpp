@@ -94,6 +94,8 @@ std::vector<Param> param_table(Config& c) {
       {"link.autopilot_timeout_s", &c.link.autopilot_timeout_s, 0.2, 60},
       {"link.timesync_rate_hz", &c.link.timesync_rate_hz, 0.0, 20},
       {"link.timesync_max_rtt_ms", &c.link.timesync_max_rtt_ms, 0.1, 10000},
+      {"link.ekf_origin", &c.link.ekf_origin},
+      {"link.delta_min_interval_ms", &c.link.delta_min_interval_ms, 0.0, 1000},
       {"seed", &c.seed, 0, 1.8e19},
   };
 }
@@ -259,6 +261,37 @@ void validate(const Config& config) {
     throw ConfigError("config key 'link.velocity_error_min_mps': must be below link.velocity_error_max_mps");
   if (!c.link.uri.empty() && !c.link.odometry && !c.link.vision_position_delta)
     throw ConfigError("config key 'link.odometry': a link with neither ODOMETRY nor VISION_POSITION_DELTA sends nothing");
+  if (c.link.odometry && c.link.vision_position_delta)
+    throw ConfigError(
+        "config key 'link.vision_position_delta': with link.odometry also on, ArduPilot's EKF3 would fuse the same "
+        "motion twice (ODOMETRY as external navigation, VISION_POSITION_DELTA as body odometry) and PX4 reads no "
+        "VISION_POSITION_DELTA: choose one (for ArduPilot's deltas set link.odometry: false)");
+  (void)parse_ekf_origin(c.link.ekf_origin);
+}
+
+std::optional<GeoPoint> parse_ekf_origin(const std::string& text) {
+  if (text.find_first_not_of(" \t") == std::string::npos) return std::nullopt;
+  const auto bad = [&](const std::string& why) {
+    return ConfigError("config key 'link.ekf_origin': " + why + " (expected \"LATITUDE_DEG, LONGITUDE_DEG, ALTITUDE_M\", got '" +
+                       text + "')");
+  };
+  std::vector<double> values;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    const auto first = item.find_first_not_of(" \t"), last = item.find_last_not_of(" \t");
+    if (first == std::string::npos) throw bad("an empty value");
+    item = item.substr(first, last - first + 1);
+    double v = 0;
+    const char* end = item.data() + item.size();
+    const auto [ptr, ec] = std::from_chars(item.data(), end, v);
+    if (ec != std::errc() || ptr != end || !std::isfinite(v)) throw bad("'" + item + "' is not a number");
+    values.push_back(v);
+  }
+  if (values.size() != 3) throw bad("3 values needed");
+  if (std::abs(values[0]) > 90) throw bad("latitude outside [-90, 90] degrees");
+  if (std::abs(values[1]) > 180) throw bad("longitude outside [-180, 180] degrees");
+  if (values[2] < -1000 || values[2] > 10000) throw bad("altitude outside [-1000, 10000] m");
+  return GeoPoint{values[0], values[1], values[2]};
 }
 
 std::vector<int> parse_cpu_list(const std::string& text) {

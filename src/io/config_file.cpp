@@ -1,5 +1,7 @@
 #include "rgbd_odometry/io/config_file.hpp"
 
+#include <cstdio>
+
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
@@ -165,6 +167,19 @@ Config parse_config_file(const std::string& path) {
         static const char* const kDistortionKeys[5] = {"camera.k1", "camera.k2", "camera.p1",
                                                        "camera.p2", "camera.k3"};
         for (int i = 0; i < 5; ++i) set_from_node(c, path, kDistortionKeys[i], node[name][i]);
+        continue;
+      }
+      if (key == "link.ekf_origin" && node[name].isSeq()) {
+        // [lat, lon, alt] -> the key's text form, every digit kept (1e-7 deg is ~1 cm).
+        std::string text;
+        for (const auto& value : node[name]) {
+          if (!value.isReal() && !value.isInt())
+            throw ConfigError("config key 'link.ekf_origin' in '" + path + "': expected numbers [lat, lon, alt]");
+          char number[32];
+          std::snprintf(number, sizeof number, "%.12g", static_cast<double>(value));
+          text += (text.empty() ? "" : ", ") + std::string(number);
+        }
+        set_config_value(c, key, ConfigValue{text});
         continue;
       }
       set_from_node(c, path, key, node[name]);

@@ -17,6 +17,15 @@ constexpr std::int64_t kHeartbeatPeriodNs = 1'000'000'000;
 constexpr int kReceivePoll_ms = 100;
 constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kFrameRateHz = 30.0;  // the sensor's rate, for the serial capacity check
+// The EKF origin is sent this many times, a second apart, each time an autopilot is heard or
+// comes back (it may have rebooted and lost it): a lost datagram costs one copy, not the flight.
+constexpr int kOriginRepeats = 5;
+constexpr std::int64_t kOriginPeriodNs = 1'000'000'000;
+// PX4 uses a TIMESYNC round trip only below this (Timesync.hpp MAX_RTT_SAMPLE, 10 ms).
+constexpr std::int64_t kPx4MaxRttNs = 10'000'000;
+// The receiver answers TIMESYNC requests: above the pipeline's threads (SCHED_OTHER) so that
+// an answer never waits for a busy core (measured: up to 7 ms on an idle 2-core x86 without).
+constexpr int kReceiverPriority = 10;
 
 MavlinkOdometryConfig message_config(const Config& c) {
   MavlinkOdometryConfig m;
@@ -24,6 +33,7 @@ MavlinkOdometryConfig message_config(const Config& c) {
   m.quality_sigma_fail_m = c.link.quality_sigma_fail_m;
   m.velocity_error_min_mps = c.link.velocity_error_min_mps;
   m.velocity_error_max_mps = c.link.velocity_error_max_mps;
+  m.delta_min_interval_s = c.link.delta_min_interval_ms * 1e-3;
   return m;
 }
 
@@ -57,6 +67,14 @@ bool addressed_to(const mavlink::Timesync& m, std::uint8_t system_id, std::uint8
          (m.target_component == 0 || m.target_component == component_id);
 }
 
+std::int32_t degrees_e7(double degrees) { return static_cast<std::int32_t>(std::llround(degrees * 1e7)); }
+
+std::string describe(const GeoPoint& origin) {
+  char text[96];
+  std::snprintf(text, sizeof text, "%.7f, %.7f, %.3f m", origin.latitude_deg, origin.longitude_deg, origin.altitude_m);
+  return text;
+}
+
 }  // namespace
 
 CameraExtrinsic extrinsic_from(const BodyConfig& body) {
@@ -74,6 +92,7 @@ FlightLink::FlightLink(const Config& config)
     : config_(config.link), options_(parse_link_uri(config.link.uri)), link_(open_link(options_)),
       builder_(message_config(config)),
       timesync_period_ns_(config.link.timesync_rate_hz > 0 ? seconds_to_ns(1.0 / config.link.timesync_rate_hz) : 0),
+      origin_(parse_ekf_origin(config.link.ekf_origin)),
       framer_(static_cast<std::uint8_t>(config.link.system_id), mavlink::kMavCompIdVisualInertialOdometry),
       watch_(static_cast<std::uint8_t>(config.link.autopilot_system_id), static_cast<std::uint8_t>(config.link.system_id),
              mavlink::kMavCompIdVisualInertialOdometry, seconds_to_ns(config.link.autopilot_timeout_s)),
@@ -81,6 +100,9 @@ FlightLink::FlightLink(const Config& config)
       receive_buffer_(kMaxDatagramBytes) {
   problems_seen_ = link_->stats().problem_reports;  // what is wrong at start is in startup_report()
   receiver_ = std::thread([this] { receive_loop(); });
+  sched_param priority{};
+  priority.sched_priority = kReceiverPriority;
+  receiver_realtime_ = pthread_setschedparam(receiver_.native_handle(), SCHED_FIFO, &priority) == 0;
 }
 
 FlightLink::~FlightLink() {
@@ -95,8 +117,24 @@ void FlightLink::send_message(const Message& message) {
 }
 
 void FlightLink::send_pair(const PairResult& pair) {
+  if (pair.status == Status::StampNotIncreasing) return;  // a dropped frame: nothing happened
   if (pair.status == Status::SensorLost) builder_.note_sensor_reset();
   builder_.add(pair);
+  // An autopilot keeps its samples in time order (PX4's ring buffer, EKF3's): a message not
+  // after the last one sent (a host clock step) is held back and counted, never sent.
+  const auto time_usec = static_cast<std::int64_t>(pair.t_curr_ns / 1000);
+  if (time_usec <= last_time_usec_) {
+    ++held_back_;
+    return;
+  }
+  last_time_usec_ = time_usec;
+  if (pair.status == Status::Ok) {
+    // Capture to hand-over, for the EKF2_EV_DELAY advice: a slow average (a few seconds).
+    const double latency_ms = static_cast<double>(steady_now_ns() - pair.t_curr_ns) * 1e-6;
+    const double smoothed = output_latency_ms_.load();
+    if (latency_ms > 0 && latency_ms < 1000)
+      output_latency_ms_ = smoothed < 0 ? latency_ms : 0.95 * smoothed + 0.05 * latency_ms;
+  }
   if (config_.odometry) {
     if (const auto odometry = builder_.odometry()) send_message(*odometry);
   }
@@ -154,7 +192,7 @@ bool FlightLink::handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns
     reply.ts1 = request.ts1;
     reply.target_system = frame.sysid;
     reply.target_component = frame.compid;
-    (void)link_->send(std::span<const std::uint8_t>(buffer_.data(), framer_.encode(reply, buffer_)));
+    (void)link_->send_urgent(std::span<const std::uint8_t>(buffer_.data(), framer_.encode(reply, buffer_)));
     std::lock_guard state_lock(state_mutex_);
     ++answered_;
   }
@@ -187,6 +225,37 @@ void FlightLink::tick(std::int64_t now_ns) {
     }
   }
   note_changes(now_ns);
+  send_origin(now_ns);
+}
+
+void FlightLink::send_origin(std::int64_t now_ns) {
+  if (!origin_ || origin_sends_left_ <= 0 || now_ns < next_origin_ns_) return;
+  std::uint8_t target = 0;
+  {
+    std::lock_guard lock(state_mutex_);
+    const AutopilotState ap = watch_.state(now_ns);
+    if (!ap.up) return;
+    target = ap.identity.system_id;
+  }
+  mavlink::SetGpsGlobalOrigin origin;
+  origin.latitude_deg_e7 = degrees_e7(origin_->latitude_deg);
+  origin.longitude_deg_e7 = degrees_e7(origin_->longitude_deg);
+  origin.altitude_mm = static_cast<std::int32_t>(std::llround(origin_->altitude_m * 1e3));
+  origin.target_system = target;
+  send_message(origin);
+  // Home at the origin, level: ArduPilot arms and returns there (vision_to_mavros does the same).
+  mavlink::SetHomePosition home;
+  home.latitude_deg_e7 = origin.latitude_deg_e7;
+  home.longitude_deg_e7 = origin.longitude_deg_e7;
+  home.altitude_mm = origin.altitude_mm;
+  home.target_system = target;
+  send_message(home);
+  ++origins_sent_;
+  if (origin_sends_left_-- == kOriginRepeats)
+    news_.push_back("EKF origin " + describe(*origin_) + " sent to system " + std::to_string(target) +
+                    " (SET_GPS_GLOBAL_ORIGIN and SET_HOME_POSITION, " + std::to_string(kOriginRepeats) +
+                    " times a second apart)");
+  next_origin_ns_ = now_ns + kOriginPeriodNs;
 }
 
 void FlightLink::note_changes(std::int64_t now_ns) {
@@ -213,15 +282,35 @@ void FlightLink::note_changes(std::int64_t now_ns) {
                           : "autopilot " + describe(ap.identity) + " gone: nothing heard from it for " +
                                 seconds_ago(now_ns, ap.last_frame_ns));
   }
+  if (ap.known && ap.up && (!reported_.up || ap.identity != reported_.identity)) {
+    origin_sends_left_ = kOriginRepeats;  // heard, or back (perhaps rebooted): the origin again
+    next_origin_ns_ = now_ns;
+  }
   reported_ = ap;
   if (offset.valid && !reported_offset_) {
     news_.push_back("clock offset to the autopilot " + describe(offset));
     reported_offset_ = true;
   }
+  if (offset.valid && offset.rtt_ns >= kPx4MaxRttNs && ap.identity.autopilot == mavlink::kMavAutopilotPx4 &&
+      !warned_round_trip_) {
+    // Our own requests' best round trip is the link's: PX4's to us is no shorter.
+    warned_round_trip_ = true;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "WARNING: TIMESYNC round trip %.1f ms, over PX4's 10 ms limit: PX4 uses none of these round trips, "
+                  "never converges and stamps every ODOMETRY with its arrival time. Set EKF2_EV_DELAY to about %.0f ms "
+                  "(capture to output %.0f ms + half the round trip), or use a faster link.",
+                  static_cast<double>(offset.rtt_ns) * 1e-6, advised_ev_delay_ms(offset), std::max(0.0, output_latency_ms_.load()));
+    news_.push_back(text);
+  }
   if (st.problem_reports != problems_seen_) {
     problems_seen_ = st.problem_reports;
     news_.push_back(link_->last_problem());
   }
+}
+
+double FlightLink::advised_ev_delay_ms(const TimesyncEstimate& offset) const {
+  return std::max(0.0, output_latency_ms_.load()) + static_cast<double>(offset.rtt_ns) * 1e-6 / 2;
 }
 
 std::string FlightLink::startup_report() const {
@@ -237,6 +326,10 @@ std::string FlightLink::startup_report() const {
     s << "asking its clock offset at " << config_.timesync_rate_hz << " Hz while it is up";
   else
     s << "not asking its clock offset (link.timesync_rate_hz 0)";
+  if (origin_) s << "; EKF origin " << describe(*origin_) << " for the autopilot once heard";
+  if (!receiver_realtime_)
+    s << "\nthe receiver runs at normal priority (no CAP_SYS_NICE or RLIMIT_RTPRIO): a busy CPU can delay TIMESYNC "
+         "answers past PX4's 10 ms";
   s << "\n" << status_line();
   if (const auto* serial = std::get_if<SerialLinkOptions>(&options_)) {
     // Wire bytes per pair: each message's full payload plus 12 bytes of framing.
@@ -290,7 +383,10 @@ std::string FlightLink::status_line() const {
       s << "; clock offset " << describe(r.timesync);
     else
       s << "; clock offset " << (timesync_period_ns_ > 0 ? "not measured yet" : "not asked");
+    if (r.timesync.valid && r.timesync.rtt_ns >= kPx4MaxRttNs && ap.identity.autopilot == mavlink::kMavAutopilotPx4)
+      s << " OVER PX4's 10 ms: set EKF2_EV_DELAY " << std::lround(advised_ev_delay_ms(r.timesync)) << " ms";
     s << ", " << r.timesync_requests_answered << " of its TIMESYNC requests answered";
+    if (origin_) s << ", EKF origin sent " << origins_sent_ << " times";
   }
   if (const std::string peer = link_->peer(); !peer.empty()) s << "; peer " << peer;
   if (std::holds_alternative<UdpLinkOptions>(options_) && std::get<UdpLinkOptions>(options_).listen && link_->peer().empty())

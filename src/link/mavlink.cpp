@@ -110,6 +110,29 @@ void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPo
   put_f32(out, VisionPositionDelta::kConfidenceOffset, m.confidence);
 }
 
+void pack_payload(const SetGpsGlobalOrigin& m, std::span<std::uint8_t, SetGpsGlobalOrigin::kPayloadBytes> out) {
+  put_u32(out, SetGpsGlobalOrigin::kLatitudeOffset, static_cast<std::uint32_t>(m.latitude_deg_e7));
+  put_u32(out, SetGpsGlobalOrigin::kLongitudeOffset, static_cast<std::uint32_t>(m.longitude_deg_e7));
+  put_u32(out, SetGpsGlobalOrigin::kAltitudeOffset, static_cast<std::uint32_t>(m.altitude_mm));
+  put_u8(out, SetGpsGlobalOrigin::kTargetSystemOffset, m.target_system);
+  put_u64(out, SetGpsGlobalOrigin::kTimeUsecOffset, m.time_usec);
+}
+
+void pack_payload(const SetHomePosition& m, std::span<std::uint8_t, SetHomePosition::kPayloadBytes> out) {
+  put_u32(out, SetHomePosition::kLatitudeOffset, static_cast<std::uint32_t>(m.latitude_deg_e7));
+  put_u32(out, SetHomePosition::kLongitudeOffset, static_cast<std::uint32_t>(m.longitude_deg_e7));
+  put_u32(out, SetHomePosition::kAltitudeOffset, static_cast<std::uint32_t>(m.altitude_mm));
+  put_f32(out, SetHomePosition::kXOffset, m.x);
+  put_f32(out, SetHomePosition::kYOffset, m.y);
+  put_f32(out, SetHomePosition::kZOffset, m.z);
+  put_f32_array(out, SetHomePosition::kQOffset, m.q);
+  put_f32(out, SetHomePosition::kApproachXOffset, m.approach_x);
+  put_f32(out, SetHomePosition::kApproachYOffset, m.approach_y);
+  put_f32(out, SetHomePosition::kApproachZOffset, m.approach_z);
+  put_u8(out, SetHomePosition::kTargetSystemOffset, m.target_system);
+  put_u64(out, SetHomePosition::kTimeUsecOffset, m.time_usec);
+}
+
 std::size_t trimmed_length(std::span<const std::uint8_t> payload) {
   std::size_t n = payload.size();
   while (n > 1 && payload[n - 1] == 0) --n;
@@ -137,25 +160,17 @@ std::size_t Framer::finish_frame(std::uint32_t message_id, std::uint8_t crc_extr
   return crc_at + kChecksumBytes;
 }
 
-std::size_t Framer::encode(const Heartbeat& m, FrameSpan out) {
-  pack_payload(m, payload_area<Heartbeat>(out));
-  return finish_frame(Heartbeat::kId, Heartbeat::kCrcExtra, Heartbeat::kPayloadBytes, out);
+template <typename Message>
+std::size_t Framer::encode_message(const Message& m, FrameSpan out) {
+  pack_payload(m, payload_area<Message>(out));
+  return finish_frame(Message::kId, Message::kCrcExtra, Message::kPayloadBytes, out);
 }
 
-std::size_t Framer::encode(const Timesync& m, FrameSpan out) {
-  pack_payload(m, payload_area<Timesync>(out));
-  return finish_frame(Timesync::kId, Timesync::kCrcExtra, Timesync::kPayloadBytes, out);
-}
-
-std::size_t Framer::encode(const Odometry& m, FrameSpan out) {
-  pack_payload(m, payload_area<Odometry>(out));
-  return finish_frame(Odometry::kId, Odometry::kCrcExtra, Odometry::kPayloadBytes, out);
-}
-
-std::size_t Framer::encode(const VisionPositionDelta& m, FrameSpan out) {
-  pack_payload(m, payload_area<VisionPositionDelta>(out));
-  return finish_frame(VisionPositionDelta::kId, VisionPositionDelta::kCrcExtra, VisionPositionDelta::kPayloadBytes,
-                      out);
-}
+std::size_t Framer::encode(const Heartbeat& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const Timesync& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const Odometry& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const VisionPositionDelta& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const SetGpsGlobalOrigin& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const SetHomePosition& m, FrameSpan out) { return encode_message(m, out); }
 
 }  // namespace rgbdo::mavlink

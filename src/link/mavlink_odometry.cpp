@@ -88,6 +88,12 @@ bool OdometryMessageBuilder::usable(const PairResult& pair) {
 void OdometryMessageBuilder::add(const PairResult& pair) {
   t_prev_ns_ = pair.t_prev_ns;
   t_curr_ns_ = pair.t_curr_ns;
+  if (delta_due_ || !usable(pair)) {  // sent, or broken by an unknown motion: start again
+    delta_T_ = Eigen::Isometry3d::Identity();
+    delta_P_.setZero();
+    delta_dt_s_ = 0;
+    delta_due_ = false;
+  }
   if (!usable(pair)) {
     tracking_ = Tracking::Lost;
     pending_reset_ = true;
@@ -99,7 +105,20 @@ void OdometryMessageBuilder::add(const PairResult& pair) {
     pending_reset_ = false;
   }
   integrate(last_motion_);
+  compose_delta(last_motion_);
   tracking_ = Tracking::Ok;
+}
+
+void OdometryMessageBuilder::compose_delta(const BodyMotion& m) {
+  // Right perturbations compose as the evaluation's windows do: the earlier part's is carried
+  // through the later motion, Ad(T_m^-1), and the later part's added.
+  if (delta_dt_s_ == 0) delta_start_ns_ = t_prev_ns_;
+  const Matrix6d carry = se3_adjoint(m.T_prev_curr.inverse());
+  delta_P_ = carry * delta_P_ * carry.transpose() + right_perturbation_covariance(m.T_prev_curr, m.covariance);
+  delta_T_ = delta_T_ * m.T_prev_curr;
+  delta_dt_s_ += m.dt_s;
+  // A microsecond's slack: 30 Hz stamps rounded to the microsecond must not miss 50 ms.
+  delta_due_ = delta_dt_s_ >= config_.delta_min_interval_s - 1e-6;
 }
 
 void OdometryMessageBuilder::integrate(const BodyMotion& m) {
@@ -125,8 +144,9 @@ std::int8_t OdometryMessageBuilder::quality(const BodyMotion& m) const {
   return static_cast<std::int8_t>(std::min(q, 100.0));
 }
 
-float OdometryMessageBuilder::confidence(const BodyMotion& m) const {
-  const double sigma_v = std::sqrt(std::max(0.0, m.covariance.topLeftCorner<3, 3>().trace() / 3)) / m.dt_s;
+float OdometryMessageBuilder::confidence(double translation_variance_trace, double dt_s) const {
+  // A rotation keeps the trace: that of the right perturbation's rho is that of t's.
+  const double sigma_v = std::sqrt(std::max(0.0, translation_variance_trace / 3)) / dt_s;
   const double lo = config_.velocity_error_min_mps, hi = config_.velocity_error_max_mps;
   double c = 100 * (hi - sigma_v) / (hi - lo);
   if (!(c >= 0)) c = 0;
@@ -139,6 +159,19 @@ std::optional<mavlink::Odometry> OdometryMessageBuilder::odometry() const {
   o.time_usec = to_usec(t_curr_ns_);
   o.frame_id = mavlink::kMavFrameLocalFrd;
   o.child_frame_id = mavlink::kMavFrameBodyFrd;
+  o.reset_counter = reset_counter_;
+  o.estimator_type = mavlink::kMavEstimatorTypeVision;
+  if (tracking_ != Tracking::Ok) {
+    // No pose at all, never the last one: PX4 reads quality only when EKF2_EV_QMIN > 0 (its
+    // default is 0, ev_control.cpp) and would fuse a frozen position while the vehicle moves.
+    // A non-finite position stops its EV position fusion (PX4_ISFINITE(ev_sample.pos(0)) and
+    // measurement.isAllFinite(), ev_pos_control.cpp) without declaring the sensor faulty.
+    constexpr float kNaN = mavlink::kUnknown;
+    o.x = o.y = o.z = kNaN;
+    o.q = {kNaN, kNaN, kNaN, kNaN};
+    o.quality = -1;  // pose, velocities and both covariances keep their NaN defaults
+    return o;
+  }
   const Eigen::Vector3d p = T_local_body_.translation();
   o.x = static_cast<float>(p.x());
   o.y = static_cast<float>(p.y());
@@ -149,12 +182,6 @@ std::optional<mavlink::Odometry> OdometryMessageBuilder::odometry() const {
   Matrix6d G = Matrix6d::Identity();
   G.bottomRightCorner<3, 3>() = euler_zyx_jacobian_left(T_local_body_.linear());
   o.pose_covariance = upper_triangle(G * P_ * G.transpose());
-  o.reset_counter = reset_counter_;
-  o.estimator_type = mavlink::kMavEstimatorTypeVision;
-  if (tracking_ != Tracking::Ok) {
-    o.quality = -1;  // velocities and their covariance keep their NaN defaults
-    return o;
-  }
   const Eigen::Matrix3d& dR = last_motion_.T_prev_curr.linear();
   const Eigen::Vector3d v = dR.transpose() * last_motion_.T_prev_curr.translation() / last_motion_.dt_s;
   const Eigen::Vector3d w = rotation_vector(dR) / last_motion_.dt_s;
@@ -170,17 +197,17 @@ std::optional<mavlink::Odometry> OdometryMessageBuilder::odometry() const {
 }
 
 std::optional<mavlink::VisionPositionDelta> OdometryMessageBuilder::vision_position_delta() const {
-  if (tracking_ != Tracking::Ok) return std::nullopt;
+  if (tracking_ != Tracking::Ok || !delta_due_) return std::nullopt;
   mavlink::VisionPositionDelta d;
   d.time_usec = to_usec(t_curr_ns_);
   // A difference of the two stamps: consecutive messages' deltas then add up to their stamps.
-  d.time_delta_usec = to_usec(t_curr_ns_) - to_usec(t_prev_ns_);
-  const Eigen::Matrix3d& dR = last_motion_.T_prev_curr.linear();
+  d.time_delta_usec = to_usec(t_curr_ns_) - to_usec(delta_start_ns_);
+  const Eigen::Matrix3d& dR = delta_T_.linear();
   const Eigen::Vector3d r = rotation_vector(dR);
-  const Eigen::Vector3d t_curr = dR.transpose() * last_motion_.T_prev_curr.translation();
+  const Eigen::Vector3d t_curr = dR.transpose() * delta_T_.translation();
   d.angle_delta = {static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z())};
   d.position_delta = {static_cast<float>(t_curr.x()), static_cast<float>(t_curr.y()), static_cast<float>(t_curr.z())};
-  d.confidence = confidence(last_motion_);
+  d.confidence = confidence(delta_P_.topLeftCorner<3, 3>().trace(), delta_dt_s_);
   return d;
 }
 

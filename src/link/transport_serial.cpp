@@ -57,6 +57,7 @@ using link_detail::LinkProblem;
 
 constexpr int kPollTimeout_ms = 100;  // the longest the writer waits before looking again
 constexpr std::int64_t kReopenInterval_ns = 500'000'000;
+constexpr std::size_t kUrgentFrames = 8;  // answers in flight at once: a handful at most
 constexpr std::int64_t kShutdownDrain_ns = 300'000'000;  // the most the destructor gives the queue
 
 // The termios constant of each rate in kSupportedSerialBauds, in the same order (the rates
@@ -231,7 +232,13 @@ class SerialLink final : public OutputLink {
     if (reader_handoff_fd_ >= 0) ::close(reader_handoff_fd_);
   }
 
-  SendResult send(std::span<const std::uint8_t> frame) noexcept override {
+  SendResult send(std::span<const std::uint8_t> frame) noexcept override { return enqueue(ring_, frame); }
+  // Ahead of every queued frame: an answer's round trip is what the autopilot measures its
+  // clock offset with (PX4 drops round trips of 10 ms or more), and a queue of odometry at
+  // 921600 baud is ~3 ms a frame.
+  SendResult send_urgent(std::span<const std::uint8_t> frame) noexcept override { return enqueue(urgent_, frame); }
+
+  SendResult enqueue(FrameRing& ring, std::span<const std::uint8_t> frame) noexcept {
     if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
       {
         std::lock_guard lock(mutex_);
@@ -246,12 +253,12 @@ class SerialLink final : public OutputLink {
       // The writer holds this lock only to copy one frame out (a few hundred bytes), never
       // across I/O, so this wait is microseconds at worst.
       std::lock_guard lock(mutex_);
-      if (ring_.full()) {
-        ring_.drop_oldest();
+      if (ring.full()) {
+        ring.drop_oldest();
         ++dropped_queue_full_;
         dropped_oldest = true;
       }
-      ring_.push(frame);
+      ring.push(frame);
       up = up_;
     }
     wake_writer_.notify_one();
@@ -270,7 +277,7 @@ class SerialLink final : public OutputLink {
       s.frames_dropped_queue_full = dropped_queue_full_;
       s.frames_dropped_link_down = dropped_link_down_;
       s.frames_rejected = rejected_;
-      s.frames_pending = ring_.size() + (in_flight_ ? 1 : 0);
+      s.frames_pending = ring_.size() + urgent_.size() + (in_flight_ ? 1 : 0);
       s.errors = errors_;
       s.reconnects = reconnects_;
       s.link_up = up_;
@@ -348,7 +355,7 @@ class SerialLink final : public OutputLink {
   bool stopping() {
     std::lock_guard lock(mutex_);
     if (!stop_) return false;
-    const bool drained = ring_.empty() && !in_flight_;
+    const bool drained = ring_.empty() && urgent_.empty() && !in_flight_;
     return drained || fd_ < 0 || steady_now_ns() >= stop_deadline_ns_;
   }
 
@@ -381,9 +388,10 @@ class SerialLink final : public OutputLink {
   // The oldest waiting frame into in_flight_, waiting up to one poll period for one.
   bool take_next_frame() {
     std::unique_lock lock(mutex_);
-    wake_writer_.wait_for(lock, std::chrono::milliseconds(kPollTimeout_ms), [this] { return stop_ || !ring_.empty(); });
-    if (ring_.empty()) return false;  // stopping or not: what is queued is still written
-    ring_.pop_oldest_into(in_flight_frame_);
+    wake_writer_.wait_for(lock, std::chrono::milliseconds(kPollTimeout_ms),
+                          [this] { return stop_ || !ring_.empty() || !urgent_.empty(); });
+    if (ring_.empty() && urgent_.empty()) return false;  // stopping or not: what is queued is still written
+    (urgent_.empty() ? ring_ : urgent_).pop_oldest_into(in_flight_frame_);
     in_flight_ = true;
     written_ = 0;
     return true;
@@ -452,6 +460,7 @@ class SerialLink final : public OutputLink {
   mutable std::mutex mutex_;
   std::condition_variable wake_writer_;
   FrameRing ring_;
+  FrameRing urgent_{kUrgentFrames};  // TIMESYNC answers: written before ring_
   bool in_flight_ = false;  // in_flight_frame_ holds a frame not yet fully written
   bool up_ = false;
   bool stop_ = false;

@@ -13,7 +13,7 @@
 
 // Everything that decides a keypoint or a descriptor bit is integer arithmetic (or tables made
 // once from IEEE basic operations), so that the x86-64 and the armhf builds choose the same
-// keypoints and bits: libm's last bits differ between them (README "ARM target").
+// keypoints and bits: libm's last bits differ between them (test/README.md, the armhf build).
 namespace rgbdo {
 namespace {
 

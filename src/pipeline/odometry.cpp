@@ -17,6 +17,7 @@ std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
   if (have_prev_) {
     result = estimator_.estimate(prev_, curr_);
     result->times.detect_ms = detect_ms;
+    if (PairEstimator::dropped_frame(*result)) return result;  // prev_ stays the previous frame
   }
   std::swap(prev_, curr_);  // swap, not copy: buffers are reused frame after frame
   have_prev_ = true;

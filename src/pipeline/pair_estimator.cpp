@@ -186,6 +186,12 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.t_prev_ns = r.t_curr_ns - (curr.times.t_colour_ns - prev.times.t_colour_ns);
   r.features_prev = static_cast<int>(prev.features.keypoints.size());
   r.features_curr = static_cast<int>(curr.features.keypoints.size());
+  if (curr.times.t_colour_ns <= prev.times.t_colour_ns) {
+    // Before any other verdict: the frame is dropped whatever its content, and the
+    // estimator's state (the last velocity) stays that of the previous frame's pair.
+    r.status = Status::StampNotIncreasing;
+    return r;
+  }
   const auto fail = [&](Status s) {
     r.status = s;
     last_pair_.reset();  // a gap: the old velocity says nothing about the next pair

@@ -213,7 +213,10 @@ class Run {
     pin_thread(cpus_, 2);
     int prev = -1;
     while (const auto curr = ready_.pop()) {
-      estimate(prev, *curr);
+      if (!estimate(prev, *curr)) {  // a dropped frame: the next one pairs with prev
+        free_.push(*curr);
+        continue;
+      }
       if (prev >= 0) free_.push(prev);
       prev = *curr;
     }
@@ -226,14 +229,15 @@ class Run {
     int prev = -1, curr = 0;
     while (CapturedFrame* in = mailbox_.take()) {
       extract_into(*in, slots_[static_cast<size_t>(curr)]);
-      estimate(prev, curr);
+      if (!estimate(prev, curr)) continue;  // a dropped frame: its slot is filled again
       prev = curr;
       curr = (curr + 1) % 2;
     }
     outputs_.close();
   }
 
-  void estimate(int prev_index, int curr_index) {
+  // False when the current frame is dropped (its stamp is not after the previous frame's).
+  bool estimate(int prev_index, int curr_index) {
     const ProcessedSlot& curr = slots_[static_cast<size_t>(curr_index)];
     PairOutput out;
     out.t_frame_ns = curr.frame.times.t_colour_ns;
@@ -261,7 +265,9 @@ class Run {
       }
       out.result.times.detect_ms = curr.detect_ms;
     }
+    const bool kept = !(out.has_pair && PairEstimator::dropped_frame(out.result));
     outputs_.push(std::move(out));
+    return kept;
   }
 
   // --- output thread --------------------------------------------------------------------
@@ -280,7 +286,9 @@ class Run {
       }
       if (item) {
         ++stats_.frames;
-        if (item->has_pair) {
+        if (item->has_pair && PairEstimator::dropped_frame(item->result)) {
+          ++stats_.stamp_not_increasing;
+        } else if (item->has_pair) {
           ++stats_.pairs;
           item->latency_ms = static_cast<double>(steady_now_ns() - item->t_capture_host_ns) * 1e-6;
           stats_.latency.add(item->latency_ms);

@@ -72,7 +72,12 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   int last_colour_index = -1;
   // Read by other threads (the status line) while the capture thread counts: atomic.
   std::atomic<int> dropped{0};   // colour frame indices the sensor skipped
-  std::atomic<int> replaced{0};  // colour frames replaced by a newer one while waiting for depth
+  std::atomic<int> replaced{0};  // colour frames given up: two newer ones came before their depth
+  // A colour frame that arrived while the one before it waited for its depth: the next call's
+  // frame (converted already).
+  cv::Mat pending_gray;
+  std::int64_t pending_t_ns = 0;
+  bool has_pending = false;
   // A recording played by OniFile at "manual" speed: it reads the next frame of the file each
   // time a wait finds no frame ready ("pokes" the device). Its frames must be waited for in one
   // wait each: a second poke while the player is still decoding makes it deliver two frames,
@@ -200,8 +205,22 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
       if (s.depth_history[static_cast<size_t>(k)].t_ns >= t) return true;
     return false;
   };
+  const auto nearest_depth = [&](std::int64_t t) -> Impl::DepthSlot* {
+    Impl::DepthSlot* best = nullptr;
+    for (int k = 0; k < kept(); ++k) {
+      auto& slot = s.depth_history[static_cast<size_t>(k)];
+      if (!best || std::llabs(slot.t_ns - t) < std::llabs(best->t_ns - t)) best = &slot;
+    }
+    return best && std::llabs(best->t_ns - t) <= kMaxColourDepthOffsetNs ? best : nullptr;
+  };
   bool have_colour = false;
   std::int64_t colour_t = 0;
+  if (s.has_pending) {  // the frame that came while the last one waited: this call's
+    cv::swap(out.gray, s.pending_gray);
+    colour_t = s.pending_t_ns;
+    have_colour = true;
+    s.has_pending = false;
+  }
   // One wait for any stream, in slices (one wait for a recording, see Impl::playback); -1: the
   // budget ran out, -2: interrupted or unplugged.
   // Frames that arrived before an unplug are still read: they are as good as any other (the
@@ -224,8 +243,10 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     return -1;
   };
   // Collect until a colour frame is in hand and a depth frame at or after it has arrived
-  // (the nearest depth can come up to 17 ms after its colour frame), or the wait runs out.
-  if (s.playback && s.colour_frames_read >= s.colour_frames_in_file) {
+  // (the nearest depth can come up to 17 ms after its colour frame), the next colour frame
+  // arrives with the nearest depth already in hand, or the wait runs out. The colour frame is
+  // paired with the depth frame nearest in time within 20 ms, before or after it.
+  if (!have_colour && s.playback && s.colour_frames_read >= s.colour_frames_in_file) {
     problem = "all " + std::to_string(s.colour_frames_in_file) + " colour frames of the file read";
     return false;
   }
@@ -255,29 +276,41 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
       depth_to_metres(raw, s.depth_m_per_unit, slot.depth_m);
       continue;
     }
-    // A colour frame in hand that is still waiting for its depth is replaced by this newer
-    // one: the reader fell behind. Counted, so that no frame goes unseen.
-    if (have_colour) ++s.replaced;
     const int index = frame.getFrameIndex();
     if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
     s.last_colour_index = index;
     const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                       static_cast<size_t>(frame.getStrideInBytes()));
-    colour_to_gray(rgb, true, out.gray);
     ++s.colour_frames_read;
-    have_colour = true;
-    colour_t = t;
+    if (!have_colour) {
+      colour_to_gray(rgb, true, out.gray);
+      have_colour = true;
+      colour_t = t;
+      continue;
+    }
+    // A newer colour frame while the one in hand waits for a depth at or after it. It is kept
+    // for the next call, never replaces the one in hand: the depth nearest in time may be the
+    // one before (the sensor's streams lead and lag each other by up to half a frame).
+    if (s.has_pending) {
+      // Already one waiting behind it: the frame in hand had two frame times to get a depth
+      // and did not. Given up and counted, so that no frame goes unseen.
+      ++s.replaced;
+      cv::swap(out.gray, s.pending_gray);
+      colour_t = s.pending_t_ns;
+    }
+    colour_to_gray(rgb, true, s.pending_gray);
+    s.pending_t_ns = t;
+    s.has_pending = true;
+    // A depth frame within 20 ms is in hand: one still to come would be later than this
+    // newer colour frame's arrival, and no nearer.
+    if (nearest_depth(colour_t)) break;
   }
   out.t_colour_ns = colour_t;
   out.host_lead_ns = s.clock.lead_ns();  // as proved by every frame read so far, this one's depth too
   out.status = Status::Ok;
   out.problem.clear();
-  const Impl::DepthSlot* best = nullptr;
-  for (int k = 0; k < kept(); ++k) {
-    const auto& slot = s.depth_history[static_cast<size_t>(k)];
-    if (!best || std::llabs(slot.t_ns - colour_t) < std::llabs(best->t_ns - colour_t)) best = &slot;
-  }
-  if (!best || std::llabs(best->t_ns - colour_t) > kMaxColourDepthOffsetNs) {
+  const Impl::DepthSlot* best = nearest_depth(colour_t);
+  if (!best) {
     out.t_depth_ns = colour_t;
     out.status = Status::NoDepth;
     out.problem = "no depth frame within 20 ms of the colour frame";

@@ -29,7 +29,7 @@
 //       [--capture FILE] [--ready-file FILE] [--offset-ns N] [--timesync-hz 10] [--loss P]
 //       [--reorder P] [--garbage P] [--seed N] [--start-after-ms T] [--converged-file FILE]
 //       [--expect-converged] [--silent-after-answers N] [--silent-for-heartbeats N]
-//       [--exit-after-heartbeats N] [--idle-exit-ms T] [--max-ms T]
+//       [--exit-after-heartbeats N] [--idle-exit-ms T] [--max-ms T] [--ardupilot]
 //   --udp-listen PORT   the program sends to us (udp://127.0.0.1:PORT); we answer the address
 //                       its datagrams come from, from the moment the first one arrives
 //   --udp-send H:P      the program listens (udpin://H:P); we speak first
@@ -40,6 +40,8 @@
 //   --silent-for-heartbeats N  for as long as the program sends N heartbeats, then speak again
 //   --exit-after-heartbeats N  with the above: exit after N more program heartbeats
 //   --idle-exit-ms T    exit once the program has sent nothing for T ms (default 3000)
+//   --ardupilot         HEARTBEAT as ArduPilot (MAV_AUTOPILOT_ARDUPILOTMEGA); the EKF origin the
+//                       program sends (SET_GPS_GLOBAL_ORIGIN, SET_HOME_POSITION) goes to the result
 // Exit status: 0 all assertions held, 1 some did not (see the result's "failures"), 64 usage.
 
 import dgram from 'node:dgram';
@@ -53,6 +55,7 @@ import {
 const SYSID = 1;
 const COMPID = 1;  // MAV_COMP_ID_AUTOPILOT1
 const MAV_AUTOPILOT_PX4 = 12;
+const MAV_AUTOPILOT_ARDUPILOTMEGA = 3;
 const MAV_TYPE_QUADROTOR = 2;
 
 // PX4 timesync constants (published in src/lib/timesync/Timesync.hpp).
@@ -97,6 +100,7 @@ function parseArgs(argv) {
       case '--exit-after-heartbeats': o.exitAfterHeartbeats = num(a, next()); break;
       case '--idle-exit-ms': o.idleExitMs = num(a, next()); break;
       case '--max-ms': o.maxMs = num(a, next()); break;
+      case '--ardupilot': o.ardupilot = true; break;
       default: usage(`unknown argument '${a}'`);
     }
   }
@@ -172,6 +176,7 @@ function main() {
     trueOffsetUs: truthUs, heartbeatsSent: 0, requestsSent: 0, answersReceived: 0, answersUsed: 0,
     answersRttRejected: 0, answersNotOurs: 0, causalityViolations: 0, ourAnswersToProgram: 0,
     programHeartbeats: 0, programRequests: 0, odometry: 0, framesFromProgram: 0, badFromProgram: 0,
+    origins: [], homePositions: [], visionPositionDelta: 0,
     framesDropped: 0, framesReordered: 0, garbageBytes: 0, corruptFrames: 0, unknownFrames: 0, v1Frames: 0,
     signedFrames: 0, silentPeriods: 0, converged: false, convergedAfterSamples: null, offsetUs: null,
     offsetErrorUs: null, minRttUs: null, maxUsedRttUs: null, odometryLatencyUs: null, failures: [],
@@ -236,7 +241,8 @@ function main() {
 
   function heartbeat() {
     const m = new minimal.Heartbeat();
-    m.type = MAV_TYPE_QUADROTOR; m.autopilot = MAV_AUTOPILOT_PX4; m.baseMode = 0x51; m.customMode = 0x10000;
+    m.type = MAV_TYPE_QUADROTOR; m.autopilot = opt.ardupilot ? MAV_AUTOPILOT_ARDUPILOTMEGA : MAV_AUTOPILOT_PX4;
+    m.baseMode = 0x51; m.customMode = 0x10000;
     m.systemStatus = 4; m.mavlinkVersion = 3;
     return m;
   }
@@ -302,6 +308,13 @@ function main() {
       const m = packet.protocol.data(packet.payload, common.Odometry);
       r.odometry++;
       odometryStamps.push([Number(m.timeUsec), arrivalUs]);
+    } else if (id === common.SetGpsGlobalOrigin.MSG_ID || id === common.SetHomePosition.MSG_ID) {
+      // The EKF origin (ArduPilot needs one to use an external position without GPS).
+      const home = id === common.SetHomePosition.MSG_ID;
+      const m = packet.protocol.data(packet.payload, home ? common.SetHomePosition : common.SetGpsGlobalOrigin);
+      (home ? r.homePositions : r.origins).push({ latitude: m.latitude, longitude: m.longitude, altitude: m.altitude, targetSystem: m.targetSystem });
+    } else if (id === 11011) {
+      r.visionPositionDelta++;
     }
   });
 

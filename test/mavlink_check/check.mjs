@@ -22,7 +22,7 @@
 //     dR_b [p_bc]x Jr R_bc, B's lower block R_k Jr, G as above).
 //
 // Usage: node check.mjs --decoded decoded.jsonl --log odometry.csv
-//          [--extrinsic R00,R01,R02,R10,R11,R12,R20,R21,R22,px,py,pz] [--expect-vpd]
+//          [--extrinsic R00,R01,R02,R10,R11,R12,R20,R21,R22,px,py,pz] [--expect-vpd | --vpd-only] [--delta-min-ms MS]
 //          [--velocity-frame previous|current] [--jacobians first-order|exact]
 //          [--sysid 1] [--compid 197] [--min-heartbeats 1] [--allow-msgid ID]... [--allow-untrimmed]
 //          [--max-print 200] [--quiet]
@@ -45,7 +45,7 @@ const MAV_ESTIMATOR_TYPE_VISION = 2;  // common.xml MAV_ESTIMATOR_TYPE: 2 VISION
 function usage(msg) {
   process.stderr.write(`check.mjs: ${msg}\n` +
     'usage: node check.mjs --decoded decoded.jsonl --log odometry.csv [--extrinsic R00,..,R22,px,py,pz]\n' +
-    '       [--expect-vpd] [--sysid N] [--compid N] [--min-heartbeats N] [--allow-msgid ID]...\n' +
+    '       [--expect-vpd | --vpd-only] [--delta-min-ms MS] [--sysid N] [--compid N] [--min-heartbeats N] [--allow-msgid ID]...\n' +
     '       [--allow-untrimmed] [--velocity-frame previous|current] [--jacobians first-order|exact]\n' +
     '       [--max-print N] [--quiet]\n');
   process.exit(64);
@@ -53,7 +53,7 @@ function usage(msg) {
 
 function parseArgs(argv) {
   const o = {
-    sysid: 1, compid: 197, expectVpd: false, minHeartbeats: 1, allowMsgid: new Set(), allowUntrimmed: false,
+    sysid: 1, compid: 197, expectVpd: false, vpdOnly: false, deltaMinMs: 0, minHeartbeats: 1, allowMsgid: new Set(), allowUntrimmed: false,
     maxPrint: 200, quiet: false, velocityFrame: 'previous', jacobians: 'first-order',
     Rbc: [0, 0, 1, 1, 0, 0, 0, 1, 0], pbc: [0, 0, 0],
   };
@@ -74,6 +74,8 @@ function parseArgs(argv) {
         break;
       }
       case '--expect-vpd': o.expectVpd = true; break;
+      case '--vpd-only': o.expectVpd = true; o.vpdOnly = true; break;
+      case '--delta-min-ms': o.deltaMinMs = Number(next()); break;
       case '--sysid': o.sysid = intArg(a, next(), 0, 255); break;
       case '--compid': o.compid = intArg(a, next(), 0, 255); break;
       case '--min-heartbeats': o.minHeartbeats = intArg(a, next(), 0, 1e9); break;
@@ -309,7 +311,8 @@ function main() {
   // ---- every packet ----
   let prevSeq = null;
   let seqGaps = 0;
-  const allowed = new Set([MSG_HEARTBEAT, MSG_ODOMETRY, ...opt.allowMsgid]);
+  const allowed = new Set([MSG_HEARTBEAT, ...opt.allowMsgid]);
+  if (!opt.vpdOnly) allowed.add(MSG_ODOMETRY);
   if (opt.expectVpd) allowed.add(MSG_VPD);
   const odo = [];
   const vpd = [];
@@ -341,7 +344,10 @@ function main() {
     }
   }
   if (heartbeats < opt.minHeartbeats) fail('stream', `${heartbeats} HEARTBEAT message(s), expected at least ${opt.minHeartbeats}`);
-  if (odo.length !== rows.length) fail('stream', `${odo.length} ODOMETRY message(s) for ${rows.length} log row(s)`);
+  // A frame whose stamp does not follow the previous one is logged and never sent.
+  const loggedRows = rows.length;
+  rows = rows.filter((r) => r.status !== 'stamp_not_increasing');
+  if (opt.vpdOnly ? odo.length !== 0 : odo.length !== rows.length) fail('stream', `${odo.length} ODOMETRY message(s) for ${rows.length} sent log row(s) (${loggedRows} logged)`);
 
   // ---- the odometry, row by row ----
   const { Rbc, pbc } = opt;
@@ -356,11 +362,26 @@ function main() {
   let failedSinceOk = false;
   let prevOdo = null;
   const okRows = [];  // { row, tb, rb, dtUs } for the VPD check
-  const n = Math.min(rows.length, odo.length);
+  // camera motion -> body motion: dT_b = X dT_c X^-1
+  const bodyStep = (row) => {
+    const Rb = mul3(mul3(Rbc, quatToMat(row.q)), tr3(Rbc));
+    const tb = add(add(mv3(Rbc, row.t), pbc), scale(mv3(Rb, pbc), -1));
+    return { Rb, tb, rb: rotvec(Rb) };
+  };
+  const n = opt.vpdOnly ? rows.length : Math.min(rows.length, odo.length);
   let checkedRows = 0;
 
   for (let k = 0; k < n; k++) {
     const row = rows[k];
+    if (opt.vpdOnly) {  // no ODOMETRY: the rows give the deltas VISION_POSITION_DELTA must carry
+      if (row.status === 'ok') {
+        const { Rb, tb, rb } = bodyStep(row);
+        const tCurr = parseSeconds(row.tCurrStr);
+        okRows.push({ k, row, Rb, tbPrev: tb, dtUs: tCurr.us - parseSeconds(row.tPrevStr).us, tCurrUs: tCurr.us });
+      }
+      checkedRows++;
+      continue;
+    }
     const m = odo[k].p;
     const f = m.fields;
     const where = `row ${k} (csv line ${row.line}, t_curr ${row.tCurrStr}, ${row.status}) / ODOMETRY rx=${m.rx}`;
@@ -375,6 +396,8 @@ function main() {
     const tu = BigInt(f.time_usec);
     const dtu = tu - tCurr.us;
     if (dtu < -1n || dtu > 1n) fail(where, `time_usec = ${tu}, expected ${tCurr.us} (+-1)`);
+    // An autopilot's buffers keep samples in time order: time must only move forward.
+    if (prevOdo && !(tu > BigInt(prevOdo.fields.time_usec))) fail(where, `time_usec = ${tu} not after the previous ODOMETRY's ${prevOdo.fields.time_usec}`);
     expectEq(where, 'frame_id', f.frame_id, MAV_FRAME_LOCAL_FRD);
     expectEq(where, 'child_frame_id', f.child_frame_id, MAV_FRAME_BODY_FRD);
     expectEq(where, 'estimator_type', f.estimator_type, MAV_ESTIMATOR_TYPE_VISION);
@@ -389,12 +412,7 @@ function main() {
     if (ok) {
       if (!(dt > 0)) fail(where, `dt = ${dt} s is not positive`);
       if (failedSinceOk) { resets++; failedSinceOk = false; }
-      // camera motion -> body motion
-      const Rc = quatToMat(row.q);
-      const tc = row.t;
-      const Rb = mul3(mul3(Rbc, Rc), tr3(Rbc));
-      const tb = add(add(mv3(Rbc, tc), pbc), scale(mv3(Rb, pbc), -1));
-      const rb = rotvec(Rb);
+      const { Rb, tb, rb } = bodyStep(row);
       const Jr = exact ? rightJacobian(rb) : I3;
       const J = blocks(Rbc, exact ? mul3(mul3(mul3(Rb, skew(pbc)), Jr), Rbc) : mul3(skew(pbc), Rbc), Z3, Rbc);
       const Sc = row.cov;
@@ -434,7 +452,7 @@ function main() {
       R = Rnew;
       p = add(p, dp);
       pathLen += norm(tb);
-      okRows.push({ k, row, tb: tv, rb, dtUs: tCurr.us - tPrev.us, tCurrUs: tCurr.us });
+      okRows.push({ k, row, Rb, tbPrev: tb, dtUs: tCurr.us - tPrev.us, tCurrUs: tCurr.us });
     } else {
       failedSinceOk = true;
       ['vx', 'vy', 'vz', 'rollspeed', 'pitchspeed', 'yawspeed'].forEach((name, i) => {
@@ -444,19 +462,18 @@ function main() {
       const notNan = vcov.map((v, i) => (Number.isNaN(v) ? -1 : i)).filter((i) => i >= 0);
       if (notNan.length) fail(where, `velocity_covariance not NaN at index ${notNan.join(',')} on a failed row`);
       expectEq(where, 'quality', f.quality, -1);
-      if (prevOdo) {
-        const pf = prevOdo.fields;
-        for (const name of ['x', 'y', 'z']) {
-          if (num(f[name]) !== num(pf[name])) fail(where, `${name} = ${fmt(num(f[name]))} changed from the previous message's ${fmt(num(pf[name]))} on a failed row`);
-        }
-        for (let i = 0; i < 4; i++) {
-          if (num(f.q[i]) !== num(pf.q[i])) fail(where, `q[${i}] = ${fmt(num(f.q[i]))} changed from the previous message's ${fmt(num(pf.q[i]))} on a failed row`);
-        }
-      }
+      // No pose at all: PX4 fuses a finite one whatever the quality (EKF2_EV_QMIN 0).
+      ['x', 'y', 'z'].forEach((name) => {
+        if (!Number.isNaN(num(f[name]))) fail(where, `${name} = ${fmt(num(f[name]))}, expected NaN on a failed row (a stale pose)`);
+      });
+      f.q.map(num).forEach((v, i) => { if (!Number.isNaN(v)) fail(where, `q[${i}] = ${fmt(v)}, expected NaN on a failed row`); });
+      const finitePose = pcov.map((v, i) => (Number.isNaN(v) ? -1 : i)).filter((i) => i >= 0);
+      if (finitePose.length) fail(where, `pose_covariance not NaN at index ${finitePose.join(',')} on a failed row`);
     }
     expectEq(where, 'reset_counter', f.reset_counter, (resetBase + resets) & 255);
+    if (!ok) { prevOdo = m; continue; }
 
-    // pose (both kinds of row: a failed row keeps the last pose)
+    // pose (ok rows: the integrated pose)
     const posTolAbs = 1e-6 * (1 + pathLen);
     ['x', 'y', 'z'].forEach((name, i) => expectNear(where, name, num(f[name]), p[i], 1e-5, posTolAbs));
     {
@@ -489,12 +506,31 @@ function main() {
   }
 
   // ---- VISION_POSITION_DELTA ----
+  // The deltas expected: consecutive ok rows composed until they span --delta-min-ms (the
+  // program's link.delta_min_interval_ms); a failed row starts the composition again.
+  const deltas = [];
+  {
+    const minUs = BigInt(Math.round(opt.deltaMinMs * 1000));
+    let acc = null;
+    for (const o of okRows) {
+      if (acc && o.k !== acc.lastK + 1) acc = null;
+      if (!acc) acc = { R: [1, 0, 0, 0, 1, 0, 0, 0, 1], t: [0, 0, 0], dtUs: 0n };
+      acc.t = add(acc.t, mv3(acc.R, o.tbPrev));
+      acc.R = mul3(acc.R, o.Rb);
+      acc.dtUs += o.dtUs;
+      acc.lastK = o.k;
+      if (acc.dtUs + 1n >= minUs) {  // a microsecond's slack, as the program allows
+        deltas.push({ k: o.k, row: o.row, tb: current ? mv3(tr3(acc.R), acc.t) : acc.t, rb: rotvec(acc.R), dtUs: acc.dtUs, tCurrUs: o.tCurrUs });
+        acc = null;
+      }
+    }
+  }
   if (opt.expectVpd) {
-    if (vpd.length !== okRows.length) fail('stream', `${vpd.length} VISION_POSITION_DELTA message(s) for ${okRows.length} ok row(s)`);
-    const nv = Math.min(vpd.length, okRows.length);
+    if (vpd.length !== deltas.length) fail('stream', `${vpd.length} VISION_POSITION_DELTA message(s) for ${deltas.length} expected (${okRows.length} ok rows, composed over ${opt.deltaMinMs} ms)`);
+    const nv = Math.min(vpd.length, deltas.length);
     for (let j = 0; j < nv; j++) {
       const { p: m, nOdoBefore } = vpd[j];
-      const { k, row, tb, rb, dtUs, tCurrUs } = okRows[j];
+      const { k, row, tb, rb, dtUs, tCurrUs } = deltas[j];
       const f = m.fields;
       const where = `row ${k} (csv line ${row.line}, t_curr ${row.tCurrStr}) / VISION_POSITION_DELTA rx=${m.rx}`;
       const d1 = BigInt(f.time_usec) - tCurrUs;
@@ -506,7 +542,7 @@ function main() {
       const c = num(f.confidence);
       if (!(c >= 0 && c <= 100)) fail(where, `confidence = ${fmt(c)}, expected 0..100`);
       // sent next to its own ODOMETRY: right before or right after it
-      if (nOdoBefore !== k && nOdoBefore !== k + 1) fail(where, `sent after ${nOdoBefore} ODOMETRY message(s), expected ${k} or ${k + 1} (next to its row's ODOMETRY)`);
+      if (!opt.vpdOnly && nOdoBefore !== k && nOdoBefore !== k + 1) fail(where, `sent after ${nOdoBefore} ODOMETRY message(s), expected ${k} or ${k + 1} (next to its row's ODOMETRY)`);
     }
   }
 

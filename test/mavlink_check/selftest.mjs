@@ -244,11 +244,16 @@ function buildMessages(rows, { Rbc, pbc, vpd, heartbeatEvery = 3, sysid = 1, com
       m.velocityCovariance = new Array(21).fill(NaN);
       m.quality = -1;
     }
-    m.x = pose.x; m.y = pose.y; m.z = pose.z; m.q = pose.q.slice();
-    // pose covariance: position block from P; orientation block: some positive stand-in
-    // (its roll/pitch/yaw conversion is the encoder's business, only positivity is checked)
-    m.poseCovariance = [];
-    for (let i = 0; i < 6; i++) for (let j = i; j < 6; j++) m.poseCovariance.push(i < 3 && j < 3 ? P[i][j] : (i === j ? P[i][i] : 0));
+    if (r.ok) {
+      m.x = pose.x; m.y = pose.y; m.z = pose.z; m.q = pose.q.slice();
+      // pose covariance: position block from P; orientation block: some positive stand-in
+      // (its roll/pitch/yaw conversion is the encoder's business, only positivity is checked)
+      m.poseCovariance = [];
+      for (let i = 0; i < 6; i++) for (let j = i; j < 6; j++) m.poseCovariance.push(i < 3 && j < 3 ? P[i][j] : (i === j ? P[i][i] : 0));
+    } else {  // a failed row carries no pose at all
+      m.x = m.y = m.z = NaN; m.q = [NaN, NaN, NaN, NaN];
+      m.poseCovariance = new Array(21).fill(NaN);
+    }
     m.resetCounter = reset;
     out.push({ msg: m, info });
     if (vpd && r.ok) {
@@ -403,7 +408,12 @@ const cases = [
   { name: 'reset_counter not incremented after failure', why: 'reset_counter =', mutate: (l) => { for (const e of l) if (e.info && e.info.row >= OK_ROW_AFTER_FAIL) e.msg.resetCounter -= 1; } },
   { name: 'failed row with zero velocity instead of NaN', why: 'expected NaN on a failed row', mutate: (l) => { const m = odoOf(l, FAILED[0]).msg; m.vx = m.vy = m.vz = 0; } },
   { name: 'failed row velocity covariance zero', why: 'velocity_covariance not NaN', mutate: (l) => { odoOf(l, FAILED[0]).msg.velocityCovariance = new Array(21).fill(0); } },
-  { name: 'failed row pose moved', why: 'changed from the previous message', mutate: (l) => { odoOf(l, FAILED[0]).msg.x += 0.01; } },
+  { name: 'failed row repeats the last pose (stale pose)', why: 'expected NaN on a failed row', mutate: (l) => {
+    const prev = odoOf(l, FAILED[0] - 1).msg, m = odoOf(l, FAILED[0]).msg;
+    m.x = prev.x; m.y = prev.y; m.z = prev.z; m.q = prev.q.slice(); } },
+  { name: 'failed row with a finite attitude', why: 'q[0] =', mutate: (l) => { odoOf(l, FAILED[0]).msg.q = [1, 0, 0, 0]; } },
+  { name: 'failed row with a finite pose covariance', why: 'pose_covariance not NaN', mutate: (l) => { odoOf(l, FAILED[0]).msg.poseCovariance = new Array(21).fill(1e-4); } },
+  { name: 'time_usec repeated (a duplicated frame sent)', why: 'not after the previous', mutate: (l) => { odoOf(l, 3).msg.timeUsec = odoOf(l, 2).msg.timeUsec; } },
   { name: 'quality 0 on an ok row', why: 'quality =', mutate: (l) => { odoOf(l, 2).msg.quality = 0; } },
   { name: 'quality not -1 on a failed row', why: 'quality =', mutate: (l) => { odoOf(l, FAILED[1]).msg.quality = 0; } },
   { name: 'one ODOMETRY dropped (seq kept contiguous)', why: 'ODOMETRY message(s) for', mutate: (l) => renumber(l.filter((e) => e !== odoOf(l, 6))) },

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -89,8 +90,8 @@ struct CovarianceConfig {
   // What the stamps get wrong in common, frame after frame (pipeline/latency_covariance.hpp):
   // sigma of the colour stream's capture latency behind its stamps, and of the depth stream's
   // behind the colour, seconds; 0: calibrated away. Against motion capture, TUM fr1's Kinect
-  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct (README,
-  // "Covariance"): depth 25 ms. Its colour lags the stamps by 14-19 ms, a constant delay
+  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct (src/pipeline/README.md):
+  // depth 25 ms. Its colour lags the stamps by 14-19 ms, a constant delay
   // a flight controller is told (PX4 EKF2_EV_DELAY, ArduPilot VISO_DELAY_MS) and which the
   // odometry only has to cover in part: colour 7.5 ms, half of it.
   double colour_latency_sigma_s = 0.0075;
@@ -150,7 +151,7 @@ struct BodyConfig {
   double camera_x_m = 0, camera_y_m = 0, camera_z_m = 0;  // camera position in the body frame
 };
 
-// The MAVLink 2 link to the flight computer (README "Flight-computer link").
+// The MAVLink 2 link to the flight computer (deploy/README.md).
 struct LinkConfig {
   std::string uri;  // udp://HOST:PORT, udpin://[ADDR]:PORT or serial:///dev/ttyX[:BAUD]; empty: no link
   int system_id = 1;  // the vehicle's: a companion computer shares its autopilot's system id
@@ -169,7 +170,21 @@ struct LinkConfig {
   double timesync_rate_hz = 1.0;
   // Answers slower than this round trip are not used for the offset (error bound rtt/2).
   double timesync_max_rtt_ms = 100;
+  // The EKF origin "LATITUDE_DEG, LONGITUDE_DEG, ALTITUDE_M" (WGS84, altitude AMSL), sent as
+  // SET_GPS_GLOBAL_ORIGIN and SET_HOME_POSITION once the autopilot is heard: ArduPilot's EKF3
+  // uses no external position without an origin. Empty: none sent. In a file also as a list
+  // [lat, lon, alt].
+  std::string ekf_origin;
+  // VISION_POSITION_DELTA: pairs composed until they span at least this long. ArduPilot's EKF3
+  // drops deltas closer together than its sensorIntervalMin_ms (50 ms, AP_NavEKF3).
+  double delta_min_interval_ms = 50;
 };
+
+// link.ekf_origin parsed: nullopt when empty; throws ConfigError naming the key otherwise.
+struct GeoPoint {
+  double latitude_deg = 0, longitude_deg = 0, altitude_m = 0;
+};
+std::optional<GeoPoint> parse_ekf_origin(const std::string& text);
 
 struct Config {
   CameraConfig camera;

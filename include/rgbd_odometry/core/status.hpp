@@ -15,6 +15,10 @@ enum class Status {
   RansacFailed,       // the best hypothesis has too few inliers
   CovarianceFailed,   // the perturbation covariance was not finite and positive definite
   SensorLost,         // the sensor went away between the two frames (unplugged, re-opened)
+  // The frame's capture time is not after the previous frame's (a frame listed twice, frames
+  // out of order, a clock step): no motion over no time. Logged, never sent; the frame is
+  // dropped and the next one pairs with the previous one, so tracking goes on.
+  StampNotIncreasing,
 };
 
 // The lower-case word written in the odometry log's `status` column.
@@ -29,6 +33,7 @@ constexpr std::string_view status_word(Status s) {
     case Status::RansacFailed: return "ransac_failed";
     case Status::CovarianceFailed: return "covariance_failed";
     case Status::SensorLost: return "sensor_lost";
+    case Status::StampNotIncreasing: return "stamp_not_increasing";
   }
   return "unknown";
 }

@@ -61,6 +61,8 @@ class FlightLink {
   // last heartbeat), the clock offset and round trip, the peer, what was received. Any thread.
   std::string status_line() const;
   LinkStats stats() const { return link_->stats(); }
+  // Pairs whose message was held back: their capture time was not after the last one sent.
+  std::uint64_t held_back() const { return held_back_; }
   LinkReceiveStats receive_stats() const;
   // Our clock's time_ns (steady_now_ns) on the autopilot's clock, once measured: for a
   // consumer that needs a message stamped in the autopilot's time.
@@ -74,12 +76,16 @@ class FlightLink {
   // sender_confirmed: whether the datagram's sender was already made the peer (UDP listening).
   bool handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns, bool& sender_confirmed);
   void note_changes(std::int64_t now_ns);
+  void send_origin(std::int64_t now_ns);  // link.ekf_origin, while sends are due
+  double advised_ev_delay_ms(const TimesyncEstimate& offset) const;
 
   LinkConfig config_;
   LinkOptions options_;  // parsed once: the link is opened from it
   std::unique_ptr<OutputLink> link_;
   OdometryMessageBuilder builder_;
   std::int64_t timesync_period_ns_ = 0;  // 0: we send no requests
+  std::optional<GeoPoint> origin_;       // link.ekf_origin
+  bool receiver_realtime_ = false;       // the receiver thread got SCHED_FIFO
 
   // Output thread and receiver both send; one framer keeps the sequence numbers in wire
   // order. Held only to encode one frame and hand it to the link (which never waits).
@@ -104,8 +110,16 @@ class FlightLink {
   std::int64_t next_heartbeat_ns_ = 0, next_request_ns_ = 0;
   std::uint64_t problems_seen_ = 0, peer_changes_seen_ = 0;
   AutopilotState reported_;
-  bool reported_offset_ = false;
+  bool reported_offset_ = false, warned_round_trip_ = false;
+  int origin_sends_left_ = 0;
+  std::int64_t next_origin_ns_ = 0;
+  std::atomic<std::uint64_t> origins_sent_{0};  // read by status_line() from any thread
   std::vector<std::string> news_;
+  // The output thread's own (send_pair).
+  std::int64_t last_time_usec_ = -1;
+  std::uint64_t held_back_ = 0;
+  // Capture to hand-over, smoothed; < 0 until the first good pair. Read by status_line().
+  std::atomic<double> output_latency_ms_{-1};
 };
 
 }  // namespace rgbdo

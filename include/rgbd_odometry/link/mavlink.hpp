@@ -1,8 +1,9 @@
 #pragma once
 // The wire to the flight computer: MAVLink 2 frames, written by hand so that the product
-// carries no generated MAVLink library. Four messages only: HEARTBEAT (common.xml/minimal.xml),
-// TIMESYNC, ODOMETRY (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml). Received frames
-// are split and checked by mavlink_parser.hpp; HEARTBEAT and TIMESYNC are also read here.
+// carries no generated MAVLink library. The messages it needs only: HEARTBEAT
+// (common.xml/minimal.xml), TIMESYNC, ODOMETRY, SET_GPS_GLOBAL_ORIGIN, SET_HOME_POSITION
+// (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml). Received frames are split and
+// checked by mavlink_parser.hpp; HEARTBEAT and TIMESYNC are also read here.
 //
 // Frame (MAVLink 2, unsigned):
 //   0xFD | len | incompat_flags=0 | compat_flags=0 | seq | sysid | compid | msgid (3 B, LE)
@@ -155,11 +156,51 @@ struct VisionPositionDelta {  // #11011, ardupilotmega.xml
 };
 static_assert(VisionPositionDelta::kConfidenceOffset + 4 == VisionPositionDelta::kPayloadBytes);
 
+struct SetGpsGlobalOrigin {  // #48, common.xml: ArduPilot's EKF3 needs an origin to use a position without GPS
+  static constexpr std::uint32_t kId = 48;
+  static constexpr std::uint8_t kCrcExtra = 41;
+  static constexpr std::size_t kPayloadBytes = 21;
+
+  std::int32_t latitude_deg_e7 = 0;   // [degE7] WGS84
+  std::int32_t longitude_deg_e7 = 0;  // [degE7]
+  std::int32_t altitude_mm = 0;       // [mm] AMSL, positive up
+  std::uint8_t target_system = 0;
+  std::uint64_t time_usec = 0;  // extension: [us] 0 = unknown
+
+  static constexpr std::size_t kLatitudeOffset = 0, kLongitudeOffset = 4, kAltitudeOffset = 8,
+                               kTargetSystemOffset = 12, kTimeUsecOffset = 13;
+};
+static_assert(SetGpsGlobalOrigin::kTimeUsecOffset + 8 == SetGpsGlobalOrigin::kPayloadBytes);
+
+struct SetHomePosition {  // #243, common.xml: home at the origin, so that RTL has a place to go
+  static constexpr std::uint32_t kId = 243;
+  static constexpr std::uint8_t kCrcExtra = 85;
+  static constexpr std::size_t kPayloadBytes = 61;
+
+  std::int32_t latitude_deg_e7 = 0;   // [degE7]
+  std::int32_t longitude_deg_e7 = 0;  // [degE7]
+  std::int32_t altitude_mm = 0;       // [mm] AMSL
+  float x = 0, y = 0, z = 0;          // [m] home in the local frame
+  std::array<float, 4> q{1, 0, 0, 0};  // w, x, y, z: the surface's orientation (level)
+  float approach_x = 0, approach_y = 0, approach_z = 0;  // [m]
+  std::uint8_t target_system = 0;
+  std::uint64_t time_usec = 0;  // extension: [us] 0 = unknown
+
+  static constexpr std::size_t kLatitudeOffset = 0, kLongitudeOffset = 4, kAltitudeOffset = 8, kXOffset = 12,
+                               kYOffset = 16, kZOffset = 20, kQOffset = 24, kApproachXOffset = 40,
+                               kApproachYOffset = 44, kApproachZOffset = 48, kTargetSystemOffset = 52,
+                               kTimeUsecOffset = 53;
+};
+static_assert(SetHomePosition::kTimeUsecOffset + 8 == SetHomePosition::kPayloadBytes);
+
+
 // ---- payloads: the full, untrimmed wire image of one message ---------------------------
 void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloadBytes> out);
 void pack_payload(const Timesync& m, std::span<std::uint8_t, Timesync::kPayloadBytes> out);
 void pack_payload(const Odometry& m, std::span<std::uint8_t, Odometry::kPayloadBytes> out);
 void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPositionDelta::kPayloadBytes> out);
+void pack_payload(const SetGpsGlobalOrigin& m, std::span<std::uint8_t, SetGpsGlobalOrigin::kPayloadBytes> out);
+void pack_payload(const SetHomePosition& m, std::span<std::uint8_t, SetHomePosition::kPayloadBytes> out);
 
 // The received messages, from a payload already zero-extended to at least the message's full
 // length (mavlink_parser.hpp hands out kMaxPayloadBytes).
@@ -192,6 +233,8 @@ class Framer {
   [[nodiscard]] std::size_t encode(const Timesync& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const Odometry& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const VisionPositionDelta& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const SetGpsGlobalOrigin& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const SetHomePosition& m, FrameSpan out);
 
   // The framing alone, for a payload of `payload_bytes` already written at out[kHeaderBytes]:
   // trims its trailing zeros, writes header and checksum, returns the frame length.
@@ -202,6 +245,9 @@ class Framer {
   std::uint8_t next_sequence() const { return sequence_; }
 
  private:
+  template <typename Message>
+  std::size_t encode_message(const Message& m, FrameSpan out);
+
   std::uint8_t system_id_;
   std::uint8_t component_id_;
   std::uint8_t sequence_ = 0;

@@ -32,9 +32,11 @@
 //   the velocity into the local frame with it; in the previous body frame the velocity
 //   would be off by the pair's whole rotation.
 // - Covariances go out as the 21-float upper triangle, row-major.
-// - A failed pair (status != Ok, or a non-finite or non-causal result): ODOMETRY repeats the
-//   last pose and pose covariance, velocities, rates and velocity covariance are NaN,
-//   quality = -1; no VISION_POSITION_DELTA. The pose is not moved (the motion is unknown).
+// - A failed pair (status != Ok, or a non-finite or non-causal result): ODOMETRY carries no
+//   pose: position, attitude, velocities, rates and both covariances are NaN, quality = -1
+//   (an autopilot skips a non-finite sample; a finite one would be fused as a frozen pose
+//   whatever its quality, see mavlink_odometry.cpp); no VISION_POSITION_DELTA. The integrated
+//   pose is not moved (the motion is unknown) and is sent again from the next good pair.
 // - reset_counter (uint8, wraps): +1 at the first good pair after failed ones (the pose has
 //   missed an unknown motion) and +1 at note_sensor_reset() (sensor re-opened). The pose then
 //   continues from the last pose sent, and P from the last P: after a reset the local frame
@@ -81,6 +83,10 @@ struct MavlinkOdometryConfig {
   // set them to the autopilot's values so that confidence means the noise we estimated.
   double velocity_error_min_mps = 0.1;
   double velocity_error_max_mps = 0.9;
+  // VISION_POSITION_DELTA composes consecutive good pairs until they span at least this long:
+  // ArduPilot's EKF3 drops deltas closer together than sensorIntervalMin_ms (50 ms,
+  // AP_NavEKF3_Measurements.cpp writeBodyFrameOdom), which at 30 Hz is every other one.
+  double delta_min_interval_s = 0;
 };
 
 // The pair's motion of the body origin, in the previous body frame.
@@ -118,7 +124,8 @@ class OdometryMessageBuilder {
   }
 
   // The messages for the latest pair. ODOMETRY is nullopt only before the first pair;
-  // VISION_POSITION_DELTA is nullopt unless the latest pair was good.
+  // VISION_POSITION_DELTA is nullopt unless the latest pair was good and the good pairs since
+  // the last delta span delta_min_interval_s (a failed pair starts the composition again).
   [[nodiscard]] std::optional<mavlink::Odometry> odometry() const;
   [[nodiscard]] std::optional<mavlink::VisionPositionDelta> vision_position_delta() const;
   [[nodiscard]] mavlink::Heartbeat heartbeat() const;
@@ -133,7 +140,8 @@ class OdometryMessageBuilder {
   static bool usable(const PairResult& pair);
   void integrate(const BodyMotion& m);
   std::int8_t quality(const BodyMotion& m) const;
-  float confidence(const BodyMotion& m) const;
+  float confidence(double translation_variance_trace, double dt_s) const;
+  void compose_delta(const BodyMotion& m);
 
   MavlinkOdometryConfig config_;
   Eigen::Isometry3d T_local_body_ = Eigen::Isometry3d::Identity();
@@ -144,6 +152,13 @@ class OdometryMessageBuilder {
   // The latest pair.
   std::int64_t t_prev_ns_ = 0, t_curr_ns_ = 0;
   BodyMotion last_motion_;
+  // VISION_POSITION_DELTA's composition of good pairs: motion, covariance of its right
+  // perturbation (rho, phi) (core/geometry.hpp), span, and the stamp it starts at.
+  Eigen::Isometry3d delta_T_ = Eigen::Isometry3d::Identity();
+  Matrix6d delta_P_ = Matrix6d::Zero();
+  double delta_dt_s_ = 0;
+  std::int64_t delta_start_ns_ = 0;
+  bool delta_due_ = false;  // the composition spans delta_min_interval_s: sent with this pair
 };
 
 }  // namespace rgbdo

@@ -87,6 +87,10 @@ class OutputLink {
   // never split or interleaved: the receiver sees each one whole or not at all. Call it from
   // one thread (the output thread); stats(), last_problem() and description() from any.
   virtual SendResult send(std::span<const std::uint8_t> frame) noexcept = 0;
+  // As send(), for a frame whose delay matters more than the queue's order (a TIMESYNC
+  // answer): a queueing transport writes it before the frames already waiting. May also be
+  // called from the receiver thread.
+  virtual SendResult send_urgent(std::span<const std::uint8_t> frame) noexcept { return send(frame); }
   virtual LinkStats stats() const = 0;
   // The most recent problem ("serial /dev/ttyUSB0: write failed: Input/output error (3
   // times)"); empty if there has been none. It stays after recovery: see LinkStats::link_up.

@@ -1,7 +1,7 @@
 #pragma once
 // Stage 1b, our own: ORB-class keypoints and 256-bit steered binary descriptors, spread over
 // the image, with no heap allocation per frame after the first (features.detector: GRID_ORB).
-// OpenCV's ORB on the Odroid runs Debian's armhf build, which has no NEON (README "ARM cost
+// OpenCV's ORB on the Odroid runs Debian's armhf build, which has no NEON (bench/README.md, ARM cost
 // model"); this extractor's hot loops are ours, so they can be.
 //
 //   pyramid       levels 1.. downscaled from the previous level by scale_factor, bilinear in

@@ -26,7 +26,10 @@ class PairEstimator {
 
   // The pair's random streams are seeded from the two frames' content and config.seed: the
   // same two frames give the same result in any run, at any place in it.
+  // Status::StampNotIncreasing when curr was captured no later than prev: the caller drops
+  // curr and pairs the next frame with prev (dropped_frame() says so).
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
+  static bool dropped_frame(const PairResult& r) { return r.status == Status::StampNotIncreasing; }
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
   void forget_motion() { last_pair_.reset(); }

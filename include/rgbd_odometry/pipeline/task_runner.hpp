@@ -1,6 +1,6 @@
 #pragma once
 // Work that per-frame extraction can split (our extractor's pyramid levels) goes to a
-// TaskRunner. The pipeline layer owns no threads (README "Where things live"): the runtime
+// TaskRunner. The pipeline layer owns no threads (src/README.md): the runtime
 // supplies a pool of workers started once (runtime/worker_pool.hpp); without one, the tasks
 // run in turn on the calling thread. Tasks write disjoint results, so every split of the
 // work gives the same output.
