@@ -135,6 +135,39 @@ TEST_F(ConfigFile, IntrinsicsFromAnOpenCvCalibrationFile) {
   EXPECT_DOUBLE_EQ(c.camera.distortion[4], 0.3);
 }
 
+// The EKF origin as ArduPilot users write it: a list in the file, a text on the command line;
+// every digit kept (1e-7 degree is 1 cm), nonsense refused by name.
+TEST_F(ConfigFile, EkfOriginFromAListOrATextAndRefusedWhenWrong) {
+  const Config c = load_config(
+      write("o.yaml", "%YAML:1.0\n---\nlink:\n  ekf_origin: [47.397742, 8.545594, 488.0]\n"));
+  const auto origin = parse_ekf_origin(c.link.ekf_origin);
+  ASSERT_TRUE(origin);
+  EXPECT_DOUBLE_EQ(origin->latitude_deg, 47.397742);
+  EXPECT_DOUBLE_EQ(origin->longitude_deg, 8.545594);
+  EXPECT_DOUBLE_EQ(origin->altitude_m, 488.0);
+  Config d;
+  apply_overrides(d, {"link.ekf_origin=-33.8568, 151.2153, 3"});
+  EXPECT_DOUBLE_EQ(parse_ekf_origin(d.link.ekf_origin)->latitude_deg, -33.8568);
+  EXPECT_FALSE(parse_ekf_origin(Config{}.link.ekf_origin)) << "none by default";
+  for (const char* bad : {"47.3, 8.5", "91, 8.5, 400", "47, 181, 400", "47, 8, x", "47, 8, 20000"}) {
+    Config e;
+    apply_overrides(e, {std::string("link.ekf_origin=") + bad});
+    expect_error_naming([&] { validate(e); }, "link.ekf_origin");
+  }
+  expect_error_naming(
+      [&] { load_config(write("p.yaml", "%YAML:1.0\n---\nlink:\n  ekf_origin: [47.3, north, 488]\n")); },
+      "link.ekf_origin");
+}
+
+// ODOMETRY and VISION_POSITION_DELTA together would have ArduPilot's EKF3 fuse each motion twice.
+TEST(ConfigValidation, BothMessageSetsAtOnceAreRefused) {
+  Config c;
+  apply_overrides(c, {"link.vision_position_delta=true"});
+  expect_error_naming([&] { validate(c); }, "link.vision_position_delta");
+  apply_overrides(c, {"link.odometry=false"});
+  EXPECT_NO_THROW(validate(c));
+}
+
 TEST(ConfigOverrides, CommandLineValuesWinAndAreChecked) {
   Config c;
   apply_overrides(c, {"ransac.max_iterations=300", "features.detector=AKAZE", "depth.compensate_timing=false", "seed=9"});
