@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <iterator>
+
 #include <filesystem>
 #include <fstream>
 
@@ -166,6 +168,31 @@ TEST(ConfigValidation, BothMessageSetsAtOnceAreRefused) {
   expect_error_naming([&] { validate(c); }, "link.vision_position_delta");
   apply_overrides(c, {"link.odometry=false"});
   EXPECT_NO_THROW(validate(c));
+}
+
+// --print-config: every key, read back by load_config to the very same configuration.
+TEST_F(ConfigFile, ThePrintedConfigurationReadsBackToTheSameValues) {
+  Config c = load_config(RGBDO_CONFIG_DIR "/xtion.yaml");
+  apply_overrides(c, {"link.ekf_origin=47.397742, 8.545594, 488", "covariance.timing_sigma_s=0.0015",
+                      "link.uri=udpin://:14540", "ransac.adaptive_stop=false", "seed=2147483647"});
+  const std::string printed = config_yaml(c);
+  const Config back = load_config(write("printed.yaml", printed));
+  const auto a = describe_config(c), b = describe_config(back);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_GE(a.size(), 60u);
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].value, b[i].value) << a[i].key;
+  EXPECT_EQ(config_yaml(back), printed);
+  for (const ConfigKeyInfo& k : a) EXPECT_FALSE(k.help.empty()) << k.key << " has no help line";
+}
+
+// deploy/config/README.md is the table in the code, word for word: it cannot drift.
+TEST(ConfigReference, TheShippedReferenceIsTheTableInTheCode) {
+  std::ifstream in(RGBDO_CONFIG_DIR "/README.md");
+  const std::string shipped((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(shipped, config_reference_markdown())
+      << "regenerate it: rgbd-odometry --print-config-reference > deploy/config/README.md";
+  for (const std::string& key : config_keys())
+    EXPECT_NE(shipped.find("| `" + key + "` |"), std::string::npos) << key << " is not in deploy/config/README.md";
 }
 
 TEST(ConfigOverrides, CommandLineValuesWinAndAreChecked) {

@@ -8,6 +8,7 @@
 #include "rgbd_odometry/app/list_devices.hpp"
 #include "rgbd_odometry/app/run.hpp"
 #include "rgbd_odometry/core/version.hpp"
+#include "rgbd_odometry/io/config_file.hpp"
 
 int main(int argc, char** argv) {
   rgbdo::RunOptions options;
@@ -32,10 +33,20 @@ int main(int argc, char** argv) {
   app.add_flag_callback(
       "--list-devices", [] { throw CLI::RuntimeError(rgbdo::list_devices(std::cout)); },
       "list the OpenNI2 devices present, then exit");
+  app.add_flag_callback(
+      "--print-config-reference",
+      [] {
+        std::cout << rgbdo::config_reference_markdown();
+        throw CLI::Success();
+      },
+      "print the configuration reference (every key, default, unit, range, help) as Markdown, then exit");
+  bool print_config = false;
+  app.add_flag("--print-config", print_config,
+               "print the whole effective configuration (--config, then --set) as a commented YAML file that "
+               "--config reads back, then exit");
   app.add_option("--source", options.source,
                  "frame source: tum:DIR (a TUM RGB-D sequence), openni://[DEVICE-URI] (a live sensor, the first "
-                 "found when empty) or oni:FILE.oni (an OpenNI2 recording)")
-      ->required();
+                 "found when empty) or oni:FILE.oni (an OpenNI2 recording)");
   app.add_option("--config", options.config_path, "YAML configuration (e.g. deploy/config/tum-fr1.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--set", options.overrides, "override a configuration key: --set ransac.max_iterations=300")
@@ -76,6 +87,11 @@ int main(int argc, char** argv) {
   if (!max_features.empty()) options.overrides.push_back("features.max_features=" + max_features);
   if (!scale.empty()) options.overrides.push_back("covariance.scale=" + scale);
   if (!seed.empty()) options.overrides.push_back("seed=" + seed);
+  if (print_config) return rgbdo::print_configuration(options, std::cout, std::cerr);
+  if (options.source.empty()) {
+    std::cerr << "rgbd-odometry: --source is required (or --print-config, --print-kernels, --list-devices)\n";
+    return 2;
+  }
   // SIGINT / SIGTERM: finish the frame in hand, flush every output, print the summary.
   std::signal(SIGINT, rgbdo::on_stop_signal);
   std::signal(SIGTERM, rgbdo::on_stop_signal);

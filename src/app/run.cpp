@@ -247,6 +247,16 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   return 0;
 }
 
+int print_configuration(const RunOptions& options, std::ostream& out, std::ostream& err) {
+  try {
+    out << config_yaml(configure(options));
+    return 0;
+  } catch (const ConfigError& e) {
+    err << "rgbd-odometry: configuration error: " << e.what() << "\n";
+    return 2;
+  }
+}
+
 void request_stop() { g_stop = true; }
 
 void on_stop_signal(int signal_number) {

@@ -14,6 +14,8 @@ namespace {
 // One settable parameter: where it lives in Config and the range it must lie in.
 struct Param {
   std::string key;  // "section.name"
+  std::string_view unit;  // empty: none
+  std::string_view help;  // one line: what it does, what its special values mean
   std::variant<int*, double*, bool*, std::string*, std::uint64_t*> target;
   double min = -std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
@@ -24,79 +26,79 @@ struct Param {
 std::vector<Param> param_table(Config& c) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   return {
-      {"camera.width", &c.camera.width, 16, 8192},
-      {"camera.height", &c.camera.height, 16, 8192},
-      {"camera.fx", &c.camera.fx, 1, 1e5},
-      {"camera.fy", &c.camera.fy, 1, 1e5},
-      {"camera.cx", &c.camera.cx, 0, 8192},
-      {"camera.cy", &c.camera.cy, 0, 8192},
-      {"camera.k1", &c.camera.distortion[0], -100, 100},
-      {"camera.k2", &c.camera.distortion[1], -100, 100},
-      {"camera.p1", &c.camera.distortion[2], -1, 1},
-      {"camera.p2", &c.camera.distortion[3], -1, 1},
-      {"camera.k3", &c.camera.distortion[4], -100, 100},
-      {"depth.units_per_m", &c.depth.units_per_m, 1e-3, 1e6},
-      {"depth.min_m", &c.depth.min_m, 0.0, 100},
-      {"depth.max_m", &c.depth.max_m, 0.01, 100},
-      {"depth.edge_max_relative_step", &c.depth.edge_max_relative_step, 0.0, inf},
-      {"depth.compensate_timing", &c.depth.compensate_timing},
-      {"features.detector", &c.features.detector},
-      {"features.descriptor", &c.features.descriptor},
-      {"features.max_features", &c.features.max_features, 10, 100000},
-      {"features.border_px", &c.features.border_px, 0, 1000},
-      {"features.orb_levels", &c.features.orb_levels, 1, 16},
-      {"features.orb_scale_factor", &c.features.orb_scale_factor, 1.01, 2.0},
-      {"features.fast_threshold", &c.features.fast_threshold, 1, 255},
-      {"matching.ratio", &c.matching.ratio, 1e-6, 1.0},
-      {"matching.window_px", &c.matching.window_px, 0, 1e5},
-      {"ransac.inlier_threshold_m", &c.ransac.inlier_threshold_m, 1e-5, 10},
-      {"ransac.max_iterations", &c.ransac.max_iterations, 1, 1000000},
-      {"ransac.refine_threshold", &c.ransac.refine_threshold},
-      {"ransac.min_inliers", &c.ransac.min_inliers, 3, 1000000},
-      {"ransac.adaptive_stop", &c.ransac.adaptive_stop},
-      {"covariance.perturbations", &c.covariance.perturbations, 8, 100000},
-      {"covariance.model", &c.covariance.model},
-      {"covariance.depth_noise_coeff", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
-      {"covariance.depth_lateral_sigma_px", &c.covariance.depth_lateral_sigma_px, 0.0, 100},
-      {"covariance.timing_sigma_s", &c.covariance.timing_sigma_s, -1, 1},
-      {"covariance.resample_cell_px", &c.covariance.resample_cell_px, 0, 1e5},
-      {"covariance.colour_latency_sigma_s", &c.covariance.colour_latency_sigma_s, 0, 1},
-      {"covariance.depth_latency_sigma_s", &c.covariance.depth_latency_sigma_s, 0, 1},
-      {"covariance.integration_window_s", &c.covariance.integration_window_s, 0, 3600},
-      {"covariance.pixel_sigma_px", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
-      {"covariance.residual_variance_factor", &c.covariance.residual_variance_factor},
-      {"covariance.scale", &c.covariance.scale, 1e-6, 1e6},
-      {"sensor.fps", &c.sensor.fps, 1, 120},
-      {"sensor.registration", &c.sensor.registration},
-      {"sensor.frame_timeout_ms", &c.sensor.frame_timeout_ms, 100, 600000},
-      {"sensor.pairing_wait_ms", &c.sensor.pairing_wait_ms, 0, 10000},
-      {"sensor.reconnect_timeout_s", &c.sensor.reconnect_timeout_s, -1, 1e9},
-      {"sensor.reconnect_interval_ms", &c.sensor.reconnect_interval_ms, 10, 600000},
-      {"sensor.record_oni", &c.sensor.record_oni},
-      {"runtime.processing_threads", &c.runtime.processing_threads, 1, 2},
-      {"runtime.extraction_threads", &c.runtime.extraction_threads, 1, 8},
-      {"log.max_total_mb", &c.log.max_total_mb, 0.01, 1e7},
-      {"runtime.cpu_affinity", &c.runtime.cpu_affinity},
-      {"body.camera_roll_deg", &c.body.camera_roll_deg, -180, 180},
-      {"body.camera_pitch_deg", &c.body.camera_pitch_deg, -90, 90},
-      {"body.camera_yaw_deg", &c.body.camera_yaw_deg, -180, 180},
-      {"body.camera_x_m", &c.body.camera_x_m, -10, 10},
-      {"body.camera_y_m", &c.body.camera_y_m, -10, 10},
-      {"body.camera_z_m", &c.body.camera_z_m, -10, 10},
-      {"link.uri", &c.link.uri},
-      {"link.system_id", &c.link.system_id, 1, 255},
-      {"link.odometry", &c.link.odometry},
-      {"link.vision_position_delta", &c.link.vision_position_delta},
-      {"link.quality_sigma_fail_m", &c.link.quality_sigma_fail_m, 1e-4, 10},
-      {"link.velocity_error_min_mps", &c.link.velocity_error_min_mps, 0.0, 100, true},  // 0: an exact velocity to the EKF
-      {"link.velocity_error_max_mps", &c.link.velocity_error_max_mps, 0.0, 100},
-      {"link.autopilot_system_id", &c.link.autopilot_system_id, 0, 255},
-      {"link.autopilot_timeout_s", &c.link.autopilot_timeout_s, 0.2, 60},
-      {"link.timesync_rate_hz", &c.link.timesync_rate_hz, 0.0, 20},
-      {"link.timesync_max_rtt_ms", &c.link.timesync_max_rtt_ms, 0.1, 10000},
-      {"link.ekf_origin", &c.link.ekf_origin},
-      {"link.delta_min_interval_ms", &c.link.delta_min_interval_ms, 0.0, 1000},
-      {"seed", &c.seed, 0, 1.8e19},
+      {"camera.width", "px", "image width the intrinsics are for; frames of another size are refused", &c.camera.width, 16, 8192},
+      {"camera.height", "px", "image height the intrinsics are for", &c.camera.height, 16, 8192},
+      {"camera.fx", "px", "focal length along x (calibrated; or camera.calibration_file)", &c.camera.fx, 1, 1e5},
+      {"camera.fy", "px", "focal length along y", &c.camera.fy, 1, 1e5},
+      {"camera.cx", "px", "principal point x", &c.camera.cx, 0, 8192},
+      {"camera.cy", "px", "principal point y", &c.camera.cy, 0, 8192},
+      {"camera.k1", "", "radial distortion k1 (OpenCV order; in a file also camera.distortion: [k1, k2, p1, p2, k3])", &c.camera.distortion[0], -100, 100},
+      {"camera.k2", "", "radial distortion k2", &c.camera.distortion[1], -100, 100},
+      {"camera.p1", "", "tangential distortion p1", &c.camera.distortion[2], -1, 1},
+      {"camera.p2", "", "tangential distortion p2", &c.camera.distortion[3], -1, 1},
+      {"camera.k3", "", "radial distortion k3", &c.camera.distortion[4], -100, 100},
+      {"depth.units_per_m", "1/m", "raw uint16 depth value per metre (TUM 5000, OpenNI2 1 mm: 1000)", &c.depth.units_per_m, 1e-3, 1e6},
+      {"depth.min_m", "m", "nearer depth is invalid (PrimeSense: nothing reliable below ~0.4 m)", &c.depth.min_m, 0.0, 100},
+      {"depth.max_m", "m", "farther depth is invalid (beyond ~4.5 m sigma_Z exceeds 3 cm)", &c.depth.max_m, 0.01, 100},
+      {"depth.edge_max_relative_step", "", "a keypoint whose 5x5 depth neighbourhood spans more than this fraction of its depth is on an occlusion edge: not used", &c.depth.edge_max_relative_step, 0.0, inf},
+      {"depth.compensate_timing", "", "carry each keypoint's depth from the depth frame's capture time to the colour frame's", &c.depth.compensate_timing},
+      {"features.detector", "", "GRID_ORB (ours) or an OpenCV detector by name: ORB, AKAZE, BRISK, SIFT, KAZE, FAST, GFTT, AGAST", &c.features.detector},
+      {"features.descriptor", "", "GRID_ORB (with its detector) or an OpenCV descriptor: ORB, AKAZE, BRISK, SIFT, KAZE", &c.features.descriptor},
+      {"features.max_features", "", "keypoints per frame", &c.features.max_features, 10, 100000},
+      {"features.border_px", "px", "image periphery masked before detection (distortion is worst there)", &c.features.border_px, 0, 1000},
+      {"features.orb_levels", "", "scale-pyramid levels", &c.features.orb_levels, 1, 16},
+      {"features.orb_scale_factor", "", "scale between pyramid levels", &c.features.orb_scale_factor, 1.01, 2.0},
+      {"features.fast_threshold", "", "FAST corner threshold (grey levels)", &c.features.fast_threshold, 1, 255},
+      {"matching.ratio", "", "symmetric ratio test: best / second-best distance below this", &c.matching.ratio, 1e-6, 1.0},
+      {"matching.window_px", "px", "half width of the search window around the motion prior's prediction; 0: every pair, as the paper", &c.matching.window_px, 0, 1e5},
+      {"ransac.inlier_threshold_m", "m", "lambda_inlier: 3-D distance of an inlier", &c.ransac.inlier_threshold_m, 1e-5, 10},
+      {"ransac.max_iterations", "", "RANSAC hypotheses at most", &c.ransac.max_iterations, 1, 1000000},
+      {"ransac.refine_threshold", "", "refit with the threshold min(3 sigma_inliers, lambda_inlier)", &c.ransac.refine_threshold},
+      {"ransac.min_inliers", "", "fewer inliers and the pair is reported failed", &c.ransac.min_inliers, 3, 1000000},
+      {"ransac.adaptive_stop", "", "stop once an all-inlier sample was drawn with 99.9 % probability", &c.ransac.adaptive_stop},
+      {"covariance.perturbations", "", "perturbed refits the 6x6 covariance is estimated from", &c.covariance.perturbations, 8, 100000},
+      {"covariance.model", "", "physical (core/noise_model.hpp) or paper (Willis & Brink eq. 2 alone)", &c.covariance.model},
+      {"covariance.depth_noise_coeff", "1/m", "axial depth noise sigma_Z = coeff Z^2", &c.covariance.depth_noise_coeff, 1e-9, 1.0},
+      {"covariance.depth_lateral_sigma_px", "px", "lateral noise of the depth map", &c.covariance.depth_lateral_sigma_px, 0.0, 100},
+      {"covariance.timing_sigma_s", "s", "colour-to-depth capture-time offset error; < 0: estimated from the stamps' jitter", &c.covariance.timing_sigma_s, -1, 1},
+      {"covariance.resample_cell_px", "px", "each perturbation resamples the inliers by image cells this size; 0: none", &c.covariance.resample_cell_px, 0, 1e5},
+      {"covariance.colour_latency_sigma_s", "s", "colour capture latency behind its stamps the stamps do not show; 0: calibrated away", &c.covariance.colour_latency_sigma_s, 0, 1},
+      {"covariance.depth_latency_sigma_s", "s", "depth capture latency behind the colour; 0: calibrated away", &c.covariance.depth_latency_sigma_s, 0, 1},
+      {"covariance.integration_window_s", "s", "a consumer summing motions over this horizon stays covered against the latencies; 0: per pair only", &c.covariance.integration_window_s, 0, 3600},
+      {"covariance.pixel_sigma_px", "px", "keypoint localisation error at full resolution (integer corners: 1/sqrt(12))", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
+      {"covariance.residual_variance_factor", "", "scale the noise by the fit's a-posteriori variance factor", &c.covariance.residual_variance_factor},
+      {"covariance.scale", "", "multiplies the reported covariance; 1: the noise model as it stands", &c.covariance.scale, 1e-6, 1e6},
+      {"sensor.fps", "Hz", "live sensor frame rate", &c.sensor.fps, 1, 120},
+      {"sensor.registration", "", "hardware depth-to-colour registration", &c.sensor.registration},
+      {"sensor.frame_timeout_ms", "ms", "no frame this long: the sensor is reported lost", &c.sensor.frame_timeout_ms, 100, 600000},
+      {"sensor.pairing_wait_ms", "ms", "how long a colour frame waits for a depth frame after it", &c.sensor.pairing_wait_ms, 0, 10000},
+      {"sensor.reconnect_timeout_s", "s", "after a loss, re-open for this long; < 0: for ever (the vehicle), 0: stop at the first loss", &c.sensor.reconnect_timeout_s, -1, 1e9},
+      {"sensor.reconnect_interval_ms", "ms", "time between re-open attempts", &c.sensor.reconnect_interval_ms, 10, 600000},
+      {"sensor.record_oni", "", "non-empty: also record the sensor's streams to this .oni file", &c.sensor.record_oni},
+      {"runtime.processing_threads", "", "1: extraction and estimation in one thread; 2: overlapped", &c.runtime.processing_threads, 1, 2},
+      {"runtime.extraction_threads", "", "threads extracting one frame (the same result on any number)", &c.runtime.extraction_threads, 1, 8},
+      {"runtime.cpu_affinity", "", "CPUs for capture, extraction, estimation, output (wrapping), e.g. \"4,5,6,7\"; empty: none", &c.runtime.cpu_affinity},
+      {"log.max_total_mb", "MB", "the odometry log and trajectory of this and earlier runs together; the oldest go first", &c.log.max_total_mb, 0.01, 1e7},
+      {"body.camera_roll_deg", "deg", "camera mount roll from forward-looking (Z-Y-X)", &c.body.camera_roll_deg, -180, 180},
+      {"body.camera_pitch_deg", "deg", "camera mount pitch from forward-looking; -90 looks down", &c.body.camera_pitch_deg, -90, 90},
+      {"body.camera_yaw_deg", "deg", "camera mount yaw from forward-looking", &c.body.camera_yaw_deg, -180, 180},
+      {"body.camera_x_m", "m", "camera position in the FRD body frame, forward", &c.body.camera_x_m, -10, 10},
+      {"body.camera_y_m", "m", "camera position, right", &c.body.camera_y_m, -10, 10},
+      {"body.camera_z_m", "m", "camera position, down", &c.body.camera_z_m, -10, 10},
+      {"link.uri", "", "udp://HOST:PORT, udpin://[ADDR]:PORT or serial:///dev/ttyX[:BAUD]; empty: no link", &c.link.uri},
+      {"link.system_id", "", "our MAVLink system id: the vehicle's", &c.link.system_id, 1, 255},
+      {"link.odometry", "", "send ODOMETRY (PX4 EKF2, ArduPilot EKF3)", &c.link.odometry},
+      {"link.vision_position_delta", "", "send VISION_POSITION_DELTA instead (ArduPilot; needs link.odometry false)", &c.link.vision_position_delta},
+      {"link.quality_sigma_fail_m", "m", "pair sigma_t at which ODOMETRY quality reaches 1 %", &c.link.quality_sigma_fail_m, 1e-4, 10},
+      {"link.velocity_error_min_mps", "m/s", "ArduPilot EK3_VIS_VERR_MIN: confidence maps onto [min, max]", &c.link.velocity_error_min_mps, 0.0, 100, true},  // 0: an exact velocity to the EKF
+      {"link.velocity_error_max_mps", "m/s", "ArduPilot EK3_VIS_VERR_MAX", &c.link.velocity_error_max_mps, 0.0, 100},
+      {"link.autopilot_system_id", "", "follow only this system's autopilot; 0: the first heard", &c.link.autopilot_system_id, 0, 255},
+      {"link.autopilot_timeout_s", "s", "nothing heard this long: the autopilot is reported gone", &c.link.autopilot_timeout_s, 0.2, 60},
+      {"link.timesync_rate_hz", "Hz", "our TIMESYNC requests while an autopilot is up; 0: none", &c.link.timesync_rate_hz, 0.0, 20},
+      {"link.timesync_max_rtt_ms", "ms", "slower answers are not used for our clock offset", &c.link.timesync_max_rtt_ms, 0.1, 10000},
+      {"link.ekf_origin", "deg, deg, m", "LATITUDE, LONGITUDE, ALTITUDE (AMSL) sent as SET_GPS_GLOBAL_ORIGIN and SET_HOME_POSITION (ArduPilot needs it without GPS); empty: none", &c.link.ekf_origin},
+      {"link.delta_min_interval_ms", "ms", "VISION_POSITION_DELTA composed over at least this (ArduPilot drops closer ones: 50)", &c.link.delta_min_interval_ms, 0.0, 1000},
+      {"seed", "", "seeds RANSAC and the perturbations with each pair's content: the same frames, the same result", &c.seed, 0, 2147483647},  // a file's integers are 32-bit (OpenCV's reader)
   };
 }
 
@@ -219,6 +221,46 @@ std::vector<std::string> config_keys() {
   std::vector<std::string> keys;
   for (const auto& p : param_table(c)) keys.push_back(p.key);
   return keys;
+}
+
+namespace {
+
+std::string shortest(double v) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char text[32];
+  const auto [end, ec] = std::to_chars(text, text + sizeof text, v);  // the shortest that reads back exactly
+  return ec == std::errc() ? std::string(text, end) : std::to_string(v);
+}
+
+}  // namespace
+
+std::vector<ConfigKeyInfo> describe_config(const Config& config) {
+  Config copy = config;
+  std::vector<ConfigKeyInfo> out;
+  for (const Param& p : param_table(copy)) {
+    ConfigKeyInfo info;
+    info.key = p.key;
+    info.unit = std::string(p.unit);
+    info.help = std::string(p.help);
+    std::visit(
+        [&](auto* target) {
+          using T = std::remove_pointer_t<decltype(target)>;
+          if constexpr (std::is_same_v<T, std::string>) {
+            info.kind = ConfigKeyInfo::Kind::Text;
+            info.value = *target;
+          } else if constexpr (std::is_same_v<T, bool>) {
+            info.kind = ConfigKeyInfo::Kind::Boolean;
+            info.value = *target ? "true" : "false";
+          } else {
+            info.kind = std::is_same_v<T, double> ? ConfigKeyInfo::Kind::Number : ConfigKeyInfo::Kind::Integer;
+            info.value = std::is_same_v<T, double> ? shortest(static_cast<double>(*target)) : std::to_string(*target);
+            info.range = std::string(p.above_min ? "(" : "[") + shortest(p.min) + ", " + shortest(p.max) + "]";
+          }
+        },
+        p.target);
+    out.push_back(std::move(info));
+  }
+  return out;
 }
 
 void validate(const Config& config) {

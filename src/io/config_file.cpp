@@ -4,6 +4,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <utility>
 #include <opencv2/core.hpp>
 #include <opencv2/core/persistence.hpp>
 
@@ -205,6 +207,67 @@ Config load_config(const std::string& path) {
   } catch (const std::exception& e) {
     throw ConfigError("config file '" + path + "' cannot be read: " + e.what());
   }
+}
+
+namespace {
+
+// "camera.width" -> ("camera", "width"); "seed" -> ("", "seed").
+std::pair<std::string, std::string> split_key(const std::string& key) {
+  const auto dot = key.find('.');
+  if (dot == std::string::npos) return {"", key};
+  return {key.substr(0, dot), key.substr(dot + 1)};
+}
+
+std::string unit_and_range(const ConfigKeyInfo& k) {
+  std::string text = k.unit;
+  if (!k.range.empty()) text += (text.empty() ? "" : ", ") + k.range;
+  return text;
+}
+
+}  // namespace
+
+std::string config_yaml(const Config& config) {
+  std::ostringstream out;
+  out << "%YAML:1.0\n---\n"
+         "# rgbd-odometry's whole configuration (rgbd-odometry --print-config): every key with its\n"
+         "# value, unit and range; deploy/config/README.md explains each. --config reads it back.\n";
+  std::string section;
+  for (const ConfigKeyInfo& k : describe_config(config)) {
+    const auto [key_section, name] = split_key(k.key);
+    if (key_section != section) {
+      section = key_section;
+      if (!section.empty()) out << section << ":\n";
+    }
+    const std::string indent = section.empty() ? "" : "  ";
+    const std::string bracket = unit_and_range(k);
+    out << indent << "# " << k.help << (bracket.empty() ? "" : " (" + bracket + ")") << "\n";
+    out << indent << name << ": " << (k.kind == ConfigKeyInfo::Kind::Text ? "\"" + k.value + "\"" : k.value) << "\n";
+  }
+  return out.str();
+}
+
+std::string config_reference_markdown() {
+  std::ostringstream out;
+  out << "# Configuration reference\n\n"
+         "Generated from the one table in `src/core/config.cpp` by `rgbd-odometry --print-config-reference`;\n"
+         "`test_config` keeps this file equal to it. A configuration file is YAML in OpenCV's FileStorage\n"
+         "syntax (`%YAML:1.0`, then `---`), grouped by section; every key is optional, and an unknown key,\n"
+         "a wrong type or a value out of range is refused at start-up with a message naming it. On the\n"
+         "command line `--set section.key=value` overrides the file. `rgbd-odometry --print-config\n"
+         "[--config FILE] [--set ...]` prints the whole effective configuration in this form, and\n"
+         "`--config` reads that output back. Two more spellings in a file: `camera.distortion: [k1, k2,\n"
+         "p1, p2, k3]` and `link.ekf_origin: [lat, lon, alt]`; and `camera.calibration_file` names an\n"
+         "OpenCV calibration file (`camera_matrix`, `distortion_coefficients`) for the intrinsics.\n\n"
+         "Shipped: [`tum-fr1.yaml`](tum-fr1.yaml) (TUM RGB-D freiburg1 recordings) and\n"
+         "[`xtion.yaml`](xtion.yaml) (an Asus Xtion on the Odroid-XU3, installed by the package).\n\n"
+         "| key | default | unit, range | what it does |\n| --- | --- | --- | --- |\n";
+  for (const ConfigKeyInfo& k : describe_config(Config{})) {
+    std::string help = k.help;
+    for (std::size_t at = help.find('|'); at != std::string::npos; at = help.find('|', at + 2)) help.replace(at, 1, "\\|");
+    out << "| `" << k.key << "` | " << (k.value.empty() ? "(empty)" : "`" + k.value + "`") << " | " << unit_and_range(k)
+        << " | " << help << " |\n";
+  }
+  return out.str();
 }
 
 }  // namespace rgbdo

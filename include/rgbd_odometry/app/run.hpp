@@ -28,6 +28,10 @@ struct RunOptions {
 // A live source runs until it stops delivering or request_stop() is called.
 int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err);
 
+// --print-config: the configuration run_odometry would run with (file, overrides, --link),
+// checked, as a commented YAML file on out. 0, or 2 with the problem on err.
+int print_configuration(const RunOptions& options, std::ostream& out, std::ostream& err);
+
 // Asks a running run_odometry to finish the current frame, flush and return (signal-safe).
 void request_stop();
 

@@ -220,6 +220,20 @@ void apply_overrides(Config& config, const std::vector<std::string>& assignments
 // Every key a configuration file or override may set, for help texts and docs.
 std::vector<std::string> config_keys();
 
+// One key as the configuration reference (deploy/config/README.md) and --print-config show
+// it: all of it comes from the one table in config.cpp.
+struct ConfigKeyInfo {
+  enum class Kind { Number, Integer, Boolean, Text };
+  std::string key;    // "section.name" ("seed" has no section)
+  std::string unit;   // empty: none
+  std::string help;   // one line
+  std::string range;  // "[16, 8192]", "(0, 100]"; empty for booleans and texts
+  std::string value;  // in the configuration described, as a file writes it (texts unquoted)
+  Kind kind = Kind::Number;
+};
+// Every key in the table's order (grouped by section), with config's values.
+std::vector<ConfigKeyInfo> describe_config(const Config& config);
+
 // Throws ConfigError naming the first invalid key. The syntax of link.uri is the link's
 // business (link/transport.hpp parse_link_uri), checked by the program at start-up.
 void validate(const Config& config);
