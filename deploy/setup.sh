@@ -46,6 +46,20 @@ cross_packages=(g++-arm-linux-gnueabihf mmdebstrap qemu-user-static qemu-user sy
 
 log() { printf '\n== %s\n' "$*"; }
 
+# stage NAME COMMAND...: runs one stage of a job and records how long it took; the job ends
+# with the table (stage_report), so a slow stage is seen before it costs CI its 90 minutes.
+stage_times=()
+stage() {
+  local name=$1 start=$SECONDS
+  shift
+  "$@"
+  stage_times+=("$(awk -v s=$((SECONDS - start)) -v n="$name" 'BEGIN { printf "%6.1f min  %s", s / 60, n }')")
+}
+stage_report() {
+  log "stage times"
+  printf '%s\n' "${stage_times[@]}"
+}
+
 install_dependencies() {
   local missing=()
   for p in "$@"; do
@@ -92,43 +106,55 @@ install_mavlink_checker() {
   npm ci --prefix test/mavlink_check --no-audit --no-fund --loglevel=error
 }
 
+# ctest_in DIR NAME [ctest options...]: the suite in DIR, with a JUnit report build/junit/NAME.xml.
+ctest_in() {
+  local dir=$1 name=$2
+  shift 2
+  mkdir -p "$repo/build/junit"
+  (cd "$dir" && ctest --output-on-failure -j "$jobs" --output-junit "$repo/build/junit/$name.xml" "$@")
+}
+
 run_tests() {
-  install_mavlink_checker
-  deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
-  build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
-    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
+  stage "node-mavlink" install_mavlink_checker
+  stage "armhf sysroot" deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
+  # No benchmarks in the armhf build: no test runs them there (the ARM cost model measures
+  # the armhf rgbd-odometry itself).
+  stage "armhf build" build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf" -DRGBDO_BUILD_BENCHMARKS=OFF
   # The native build also compares its replay with the armhf binary's (cross_arch_replay_matches).
-  build build/release -DCMAKE_BUILD_TYPE=Release -DRGBDO_ARMHF_BUILD_DIR="$repo/build/armhf" \
+  stage "native build" build build/release -DCMAKE_BUILD_TYPE=Release -DRGBDO_ARMHF_BUILD_DIR="$repo/build/armhf" \
     -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
   log "test suite, native release build (x86-64)"
-  (cd build/release && ctest --output-on-failure -j "$jobs")
+  stage "native suite" ctest_in build/release native
   log "test suite, armhf build under qemu-arm-static"
-  (cd build/armhf && ctest --output-on-failure -j "$jobs")
+  stage "armhf suite (qemu)" ctest_in build/armhf armhf
   # Sanitised build: memory errors and undefined behaviour must never land. Leak stacks are
   # unwound in full (the vendor OpenNI2 libraries have no frame pointers; see test/lsan.supp).
-  build build/sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE=ON -DRGBDO_BUILD_BENCHMARKS=OFF
+  stage "ASan+UBSan build" build build/sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE=ON -DRGBDO_BUILD_BENCHMARKS=OFF
   log "test suite, AddressSanitizer + UndefinedBehaviorSanitizer"
-  (cd build/sanitize &&
-    ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:fast_unwind_on_malloc=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" ctest --output-on-failure -j "$jobs")
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:fast_unwind_on_malloc=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" stage "ASan+UBSan suite" ctest_in build/sanitize sanitize
   # ThreadSanitizer: data races and lock-order inversions in the threaded pipeline, the
   # hand-overs, the worker pool, the links and the device clock must never land. Reports
   # inside the vendor libraries we do not build are suppressed by library name
   # (test/tsan.supp); the options also reach the test binaries run at build time (test
-  # discovery). Every test runs here, the live ones too: they stop on events and assert
-  # counts and order, so TSan's 5-15x slowdown (or a busy machine) changes no verdict.
+  # discovery). Every test that starts a thread runs here, the live ones too: they stop on
+  # events and assert counts and order, so TSan's 5-15x slowdown (or a busy machine) changes
+  # no verdict. The test programs that never start a thread are not built here
+  # (test/CMakeLists.txt: rgbdo_single_threaded_tests).
   export TSAN_OPTIONS="suppressions=$repo/test/tsan.supp halt_on_error=1 second_deadlock_stack=1"
-  build build/tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE_THREAD=ON -DRGBDO_BUILD_BENCHMARKS=OFF
+  stage "TSan build" build build/tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE_THREAD=ON -DRGBDO_BUILD_BENCHMARKS=OFF
   log "test suite, ThreadSanitizer"
-  (cd build/tsan && ctest --output-on-failure -j "$jobs")
+  stage "TSan suite" ctest_in build/tsan tsan
   unset TSAN_OPTIONS
   # libFuzzer: every parser of outside input, instrumented with ASan + UBSan, built by clang
   # (Debian's clang and its compiler-rt carry libFuzzer); the kept crash inputs replayed,
   # then each target fuzzed from its seed corpus for a fixed number of runs with a fixed seed
   # (test/fuzz/CMakeLists.txt; ~40 s in all here; what is explored varies a little between runs).
-  build_fuzzers
+  stage "fuzz build" build_fuzzers
   log "fuzzing: regression inputs, then a bounded run of every target"
-  (cd build/fuzz && UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j "$jobs")
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 stage "fuzz runs" ctest_in build/fuzz fuzz
+  stage_report
 }
 
 build_fuzzers() {

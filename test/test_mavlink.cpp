@@ -254,6 +254,35 @@ TEST(MavlinkFraming, SequenceWrapsAfter255PerFramer) {
   EXPECT_EQ(frame[4], 0);
 }
 
+// A frame sent ahead of queued ones is numbered again as it leaves: the same bytes as a framer
+// would have written at that sequence number, checksum included, for every message we send.
+TEST(MavlinkFraming, RestampedFrameEqualsTheFrameEncodedAtThatSequence) {
+  const auto check = [](const auto& message) {
+    Framer early(1, 197), late(1, 197);
+    FrameBuffer a{}, b{};
+    const std::size_t n = early.encode(message, a);
+    for (int i = 0; i < 77; ++i) (void)late.encode(Heartbeat{}, b);
+    ASSERT_EQ(late.encode(message, b), n);
+    ASSERT_TRUE(restamp_sequence(std::span<std::uint8_t>(a.data(), n), 77));
+    EXPECT_TRUE(std::equal(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(n), b.begin()));
+  };
+  check(Heartbeat{});
+  Timesync t;
+  t.tc1 = 123456789;
+  check(t);
+  Odometry o;
+  o.x = 1.5f;
+  check(o);
+  check(VisionPositionDelta{});
+  SetGpsGlobalOrigin g;
+  g.latitude_deg_e7 = 473977420;
+  check(g);
+  check(SetHomePosition{});
+  std::array<std::uint8_t, 12> not_ours{kMagicV2, 0, 0, 0, 0, 1, 1, 30, 0, 0, 0, 0};  // ATTITUDE
+  EXPECT_FALSE(restamp_sequence(not_ours, 5));
+  EXPECT_EQ(not_ours[4], 0);
+}
+
 TEST(MavlinkFraming, MessageIdIs24BitLittleEndian) {
   Framer framer(42, 197);
   FrameBuffer frame{};

@@ -99,6 +99,9 @@ FlightLink::FlightLink(const Config& config)
       timesync_(seconds_to_ns(config.link.timesync_max_rtt_ms * 1e-3)),
       receive_buffer_(kMaxDatagramBytes) {
   problems_seen_ = link_->stats().problem_reports;  // what is wrong at start is in startup_report()
+  // Serial sends TIMESYNC answers ahead of queued frames: number every frame as it leaves, so
+  // that the sequence is the wire's order (the transport's thread is the only caller).
+  link_->set_restamp([this](std::span<std::uint8_t> frame) { (void)mavlink::restamp_sequence(frame, wire_sequence_++); });
   receiver_ = std::thread([this] { receive_loop(); });
   sched_param priority{};
   priority.sched_priority = kReceiverPriority;

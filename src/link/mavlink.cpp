@@ -133,6 +133,33 @@ void pack_payload(const SetHomePosition& m, std::span<std::uint8_t, SetHomePosit
   put_u64(out, SetHomePosition::kTimeUsecOffset, m.time_usec);
 }
 
+std::optional<std::uint8_t> sent_crc_extra(std::uint32_t msgid) {
+  switch (msgid) {
+    case Heartbeat::kId: return Heartbeat::kCrcExtra;
+    case Timesync::kId: return Timesync::kCrcExtra;
+    case Odometry::kId: return Odometry::kCrcExtra;
+    case VisionPositionDelta::kId: return VisionPositionDelta::kCrcExtra;
+    case SetGpsGlobalOrigin::kId: return SetGpsGlobalOrigin::kCrcExtra;
+    case SetHomePosition::kId: return SetHomePosition::kCrcExtra;
+    default: return std::nullopt;
+  }
+}
+
+bool restamp_sequence(std::span<std::uint8_t> frame, std::uint8_t sequence) {
+  if (frame.size() < kHeaderBytes + kChecksumBytes || frame[0] != kMagicV2 || frame[2] != 0) return false;
+  const std::size_t crc_at = kHeaderBytes + frame[1];
+  if (frame.size() != crc_at + kChecksumBytes) return false;
+  const auto msgid = static_cast<std::uint32_t>(frame[7] | frame[8] << 8 | frame[9] << 16);
+  const std::optional<std::uint8_t> crc_extra = sent_crc_extra(msgid);
+  if (!crc_extra) return false;
+  frame[4] = sequence;
+  std::uint16_t crc = crc16_mcrf4xx(frame.subspan(1, crc_at - 1));
+  crc = crc_accumulate(*crc_extra, crc);
+  frame[crc_at] = static_cast<std::uint8_t>(crc & 0xFF);
+  frame[crc_at + 1] = static_cast<std::uint8_t>(crc >> 8);
+  return true;
+}
+
 std::size_t trimmed_length(std::span<const std::uint8_t> payload) {
   std::size_t n = payload.size();
   while (n > 1 && payload[n - 1] == 0) --n;

@@ -238,6 +238,11 @@ class SerialLink final : public OutputLink {
   // 921600 baud is ~3 ms a frame.
   SendResult send_urgent(std::span<const std::uint8_t> frame) noexcept override { return enqueue(urgent_, frame); }
 
+  void set_restamp(std::function<void(std::span<std::uint8_t>)> restamp) override {
+    std::lock_guard lock(mutex_);
+    restamp_ = std::move(restamp);
+  }
+
   SendResult enqueue(FrameRing& ring, std::span<const std::uint8_t> frame) noexcept {
     if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
       {
@@ -392,6 +397,7 @@ class SerialLink final : public OutputLink {
                           [this] { return stop_ || !ring_.empty() || !urgent_.empty(); });
     if (ring_.empty() && urgent_.empty()) return false;  // stopping or not: what is queued is still written
     (urgent_.empty() ? ring_ : urgent_).pop_oldest_into(in_flight_frame_);
+    if (restamp_) restamp_(std::span<std::uint8_t>(in_flight_frame_.bytes.data(), in_flight_frame_.size));
     in_flight_ = true;
     written_ = 0;
     return true;
@@ -461,6 +467,7 @@ class SerialLink final : public OutputLink {
   std::condition_variable wake_writer_;
   FrameRing ring_;
   FrameRing urgent_{kUrgentFrames};  // TIMESYNC answers: written before ring_
+  std::function<void(std::span<std::uint8_t>)> restamp_;  // on each frame as it leaves (under mutex_)
   bool in_flight_ = false;  // in_flight_frame_ holds a frame not yet fully written
   bool up_ = false;
   bool stop_ = false;

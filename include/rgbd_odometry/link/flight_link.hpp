@@ -92,6 +92,7 @@ class FlightLink {
   std::mutex send_mutex_;
   mavlink::Framer framer_;
   mavlink::FrameBuffer buffer_{};
+  std::uint8_t wire_sequence_ = 0;  // a reordering transport's thread's own (set_restamp)
 
   // Shared state, under state_mutex_: held only for the bookkeeping of one frame.
   mutable std::mutex state_mutex_;

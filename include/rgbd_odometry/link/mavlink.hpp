@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 
 namespace rgbdo::mavlink {
@@ -252,6 +253,15 @@ class Framer {
   std::uint8_t component_id_;
   std::uint8_t sequence_ = 0;
 };
+
+// CRC_EXTRA of the messages this program sends; nullopt for any other id.
+[[nodiscard]] std::optional<std::uint8_t> sent_crc_extra(std::uint32_t msgid);
+
+// Gives an encoded frame of ours (unsigned MAVLink 2) another sequence number and its
+// checksum again: a transport that sends some frames ahead of others numbers them in wire
+// order, so that receivers counting losses by the sequence count none. False (frame
+// untouched) when it is not a frame of a message we send.
+bool restamp_sequence(std::span<std::uint8_t> frame, std::uint8_t sequence);
 
 // Length of a payload after MAVLink 2 trimming: trailing zero bytes dropped, never below 1.
 [[nodiscard]] std::size_t trimmed_length(std::span<const std::uint8_t> payload);

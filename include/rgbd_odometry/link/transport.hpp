@@ -13,6 +13,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -91,6 +92,10 @@ class OutputLink {
   // answer): a queueing transport writes it before the frames already waiting. May also be
   // called from the receiver thread.
   virtual SendResult send_urgent(std::span<const std::uint8_t> frame) noexcept { return send(frame); }
+  // A transport that sends urgent frames ahead of queued ones calls this on each frame as it
+  // leaves, in wire order, so that the sender can number the frames in that order (MAVLink's
+  // sequence). Called on the transport's own thread; set it once, before sending.
+  virtual void set_restamp(std::function<void(std::span<std::uint8_t> frame)> restamp) { (void)restamp; }
   virtual LinkStats stats() const = 0;
   // The most recent problem ("serial /dev/ttyUSB0: write failed: Input/output error (3
   // times)"); empty if there has been none. It stays after recovery: see LinkStats::link_up.
