@@ -5,6 +5,9 @@
 // not there must not cost the log a single row.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
+#include <algorithm>
 #include <pty.h>
 #include <sys/wait.h>
 #include <termios.h>
@@ -175,6 +178,50 @@ TEST(FlightLinkDecoded, AFrameListedTwiceIsFlaggedAndNeverSent) {
   EXPECT_NE(out.str().find("1 dropped for a capture time not after the previous frame's"), std::string::npos) << out.str();
   std::string report;
   EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
+}
+
+// GIVEN a recording whose colour goes black for 10 frames (a lens covered, a light failing),
+// WHEN replayed over UDP, THEN every failed pair's ODOMETRY carries no pose at all (NaN; PX4
+// at EKF2_EV_QMIN 0 fuses any finite one), every ok pair is sent, and the pose resumes with
+// reset_counter incremented (check.mjs recomputes all of it from the log).
+TEST(FlightLinkDecoded, BlackedOutFramesSendNoPose) {
+  const ScratchDir scratch_dir = scratch("blackout");
+  const fs::path& dir = scratch_dir.path();
+  const fs::path recording = dir / "recording";
+  fs::create_directories(recording / "rgb");
+  for (const char* item : {"depth", "depth.txt", "groundtruth.txt", "rgb.txt"})
+    fs::create_symlink(fs::path(RGBDO_TEST_DATA_DIR) / item, recording / item);
+  std::vector<fs::path> images;
+  for (const auto& entry : fs::directory_iterator(fs::path(RGBDO_TEST_DATA_DIR) / "rgb")) images.push_back(entry.path());
+  std::sort(images.begin(), images.end());
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const fs::path to = recording / "rgb" / images[i].filename();
+    if (i >= 15 && i < 25)
+      cv::imwrite(to.string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)));
+    else
+      fs::create_symlink(images[i], to);
+  }
+  const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
+                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
+                                       (dir / "decoded.jsonl").string()},
+                                      -1);
+  const std::string ready = wait_for_ready(dir / "ready");
+  ASSERT_NE(ready.rfind(':'), std::string::npos) << "decoder not ready: '" << ready << "'";
+  RunOptions o;
+  o.source = "tum:" + recording.string();
+  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
+  o.log_path = (dir / "odometry.csv").string();
+  o.link = "udp://127.0.0.1:" + ready.substr(ready.rfind(':') + 1);
+  o.quiet = true;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_odometry(o, out, err), 0) << err.str();
+  EXPECT_EQ(wait_exit(decoder), 0);
+  // Pairs into, inside and out of the dark: 11 fail (ten dark frames, and the first bright one
+  // after them pairs with a dark one); the others are ok.
+  EXPECT_NE(out.str().find("39 pairs, 28 ok, 11 failed"), std::string::npos) << out.str();
+  std::string report;
+  EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
+  EXPECT_NE(report.find("\"odometry\":39"), std::string::npos) << report;
 }
 
 // Nothing listens: the link reports it, and odometry and its log are untouched.

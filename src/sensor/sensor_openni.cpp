@@ -165,6 +165,7 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
     throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
   }
   for (auto& slot : s.depth_history) slot.depth_m.create(options.height, options.width, CV_32FC1);
+  s.pending_gray.create(options.height, options.width, CV_8UC1);  // no allocation when one first waits
 }
 
 OpenNiSource::~OpenNiSource() {
@@ -314,7 +315,8 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     out.t_depth_ns = colour_t;
     out.status = Status::NoDepth;
     out.problem = "no depth frame within 20 ms of the colour frame";
-    out.depth_m.release();
+    // The status says there is none; the buffer is kept for the next frame (releasing a 1.2-MB
+    // image and allocating it again moves glibc's mmap threshold, and the heap grows for it).
     return true;
   }
   out.t_depth_ns = best->t_ns;

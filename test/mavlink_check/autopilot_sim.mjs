@@ -49,7 +49,7 @@ import fs from 'node:fs';
 import tty from 'node:tty';
 import {
   MavLinkPacketSplitter, MavLinkPacketParser, MavLinkProtocolV1, MavLinkProtocolV2, MavLinkPacketSignature,
-  minimal, common,
+  minimal, common, ardupilotmega,
 } from 'node-mavlink';
 
 const SYSID = 1;
@@ -177,11 +177,13 @@ function main() {
     answersRttRejected: 0, answersNotOurs: 0, causalityViolations: 0, ourAnswersToProgram: 0,
     programHeartbeats: 0, programRequests: 0, odometry: 0, framesFromProgram: 0, badFromProgram: 0,
     origins: [], homePositions: [], visionPositionDelta: 0,
+    rules: { staleFused: 0, notAfterPrevious: 0, deltaDropped: 0, beforeOrigin: 0 },
     framesDropped: 0, framesReordered: 0, garbageBytes: 0, corruptFrames: 0, unknownFrames: 0, v1Frames: 0,
     signedFrames: 0, silentPeriods: 0, converged: false, convergedAfterSamples: null, offsetUs: null,
     offsetErrorUs: null, minRttUs: null, maxUsedRttUs: null, odometryLatencyUs: null, failures: [],
   };
   const estimator = new Px4TimesyncEstimator();
+  let lastOdometryUs = null, lastDeltaUs = null;
   const outstanding = new Map();  // ts1 (string) -> true: our requests not answered yet
   const odometryStamps = [];  // [time_usec (program clock), arrival (our clock, us)]
   const capture = opt.capture ? fs.openSync(opt.capture, 'w') : null;
@@ -308,6 +310,17 @@ function main() {
       const m = packet.protocol.data(packet.payload, common.Odometry);
       r.odometry++;
       odometryStamps.push([Number(m.timeUsec), arrivalUs]);
+      // The autopilots' acceptance rules, as their source states them:
+      // PX4 ev_control.cpp: quality_sufficient = (EKF2_EV_QMIN <= 0) || (quality >= EKF2_EV_QMIN),
+      // default 0; ev_pos_control.cpp fuses a position that is finite (PX4_ISFINITE(pos(0))).
+      // So a failed pair's message (quality -1) with a finite position is fused: a stale pose.
+      if (m.quality === -1 && Number.isFinite(m.x) && Number.isFinite(m.y)) r.rules.staleFused++;
+      // EKF2's and EKF3's sample buffers keep time order: a sample not after the last one is
+      // a duplicate (or out of order) fused at the wrong time.
+      if (lastOdometryUs !== null && m.timeUsec <= lastOdometryUs) r.rules.notAfterPrevious++;
+      lastOdometryUs = m.timeUsec;
+      // EKF3 needs an origin (SET_GPS_GLOBAL_ORIGIN) to use an external position without GPS.
+      if (opt.ardupilot && r.origins.length === 0) r.rules.beforeOrigin++;
     } else if (id === common.SetGpsGlobalOrigin.MSG_ID || id === common.SetHomePosition.MSG_ID) {
       // The EKF origin (ArduPilot needs one to use an external position without GPS).
       const home = id === common.SetHomePosition.MSG_ID;
@@ -315,6 +328,11 @@ function main() {
       (home ? r.homePositions : r.origins).push({ latitude: m.latitude, longitude: m.longitude, altitude: m.altitude, targetSystem: m.targetSystem });
     } else if (id === 11011) {
       r.visionPositionDelta++;
+      // EKF3 drops body odometry less than sensorIntervalMin_ms (50 ms) after the last
+      // (AP_NavEKF3_Measurements.cpp writeBodyFrameOdom): a motion lost.
+      const t = packet.protocol.data(packet.payload, ardupilotmega.VisionPositionDelta).timeUsec;
+      if (lastDeltaUs !== null && t - lastDeltaUs < 50_000n) r.rules.deltaDropped++;
+      lastDeltaUs = t;
     }
   });
 
@@ -369,6 +387,10 @@ function main() {
     if (r.causalityViolations > 0) r.failures.push(`${r.causalityViolations} answers outside [request, arrival]`);
     if (r.badFromProgram > 0) r.failures.push(`${r.badFromProgram} frames from the program failed their CRC`);
     if (r.answersNotOurs > 0) r.failures.push(`${r.answersNotOurs} answers not to our requests`);
+    if (r.rules.staleFused) r.failures.push(`${r.rules.staleFused} failed pairs with a finite pose: PX4 (EKF2_EV_QMIN 0) fuses them`);
+    if (r.rules.notAfterPrevious) r.failures.push(`${r.rules.notAfterPrevious} ODOMETRY not after the previous one`);
+    if (r.rules.deltaDropped) r.failures.push(`${r.rules.deltaDropped} VISION_POSITION_DELTA within 50 ms of the last: EKF3 drops them`);
+    if (r.odometry > 0 && r.visionPositionDelta > 0) r.failures.push('ODOMETRY and VISION_POSITION_DELTA both: EKF3 fuses the motion twice');
     if (opt.expectConverged) {
       if (!r.converged) r.failures.push(`not converged: ${estimator.sequence} of ${PX4.convergenceWindow} samples`);
       else if (Math.abs(r.offsetErrorUs) >= 1000) r.failures.push(`offset off by ${r.offsetErrorUs} us (limit 1000)`);
