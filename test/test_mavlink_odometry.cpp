@@ -491,6 +491,27 @@ TEST(MavlinkOdometry, DeltasAreComposedOverTheMinimumInterval) {
   EXPECT_TRUE(builder.vision_position_delta());
 }
 
+// GIVEN the autopilot's roll and pitch at the first pair, THEN the pose starts there (the local
+// frame level, yawed as the body), a forward step moves along the tilted body x in it, and the
+// attitude sent has that roll and pitch; once a pose exists the frame is not levelled again.
+TEST(MavlinkOdometry, TheLocalFrameIsLevelledWithTheInitialAttitude) {
+  OdometryMessageBuilder builder;
+  const double roll = 0.1, pitch = -0.05;
+  ASSERT_TRUE(builder.level_initial_attitude(roll, pitch));
+  builder.add(pair(0, transform({0, 0, 0.05}, {0, 0, 0}), diagonal_covariance(0.003, 0.002)));  // camera z: body x
+  const Eigen::Matrix3d R0 = (Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                              Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX())).toRotationMatrix();
+  const Eigen::Vector3d expected = R0 * Eigen::Vector3d(0.05, 0, 0);
+  const auto o = *builder.odometry();
+  EXPECT_NEAR(o.x, expected.x(), 1e-7);
+  EXPECT_NEAR(o.z, expected.z(), 1e-7);  // nose 0.05 rad down: forward goes down (z +2.5 mm)
+  const Eigen::Vector3d rpy = euler_zyx(Eigen::Quaterniond(o.q[0], o.q[1], o.q[2], o.q[3]).toRotationMatrix());
+  EXPECT_NEAR(rpy.x(), roll, 1e-6);
+  EXPECT_NEAR(rpy.y(), pitch, 1e-6);
+  EXPECT_NEAR(rpy.z(), 0, 1e-6);
+  EXPECT_FALSE(builder.level_initial_attitude(0.3, 0.3)) << "a pose exists: the frame stays";
+}
+
 TEST(MavlinkOdometry, SensorResetIncrementsAndTheCounterWraps) {
   OdometryMessageBuilder builder;
   builder.add(pair(0, transform({0, 0, 0.05}, {0, 0, 0}), diagonal_covariance(0.003, 0.002)));

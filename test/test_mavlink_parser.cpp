@@ -221,17 +221,34 @@ TEST(MavlinkParser, AGoodFrameThatBeganInsideATruncatedOneIsFound) {
 }
 
 TEST(MavlinkParser, UnknownIdsAreSkippedByLength) {
-  // An ATTITUDE (#30, 28 bytes): no CRC_EXTRA known here, so its length is trusted. Its
+  // A SYS_STATUS (#1, 31 bytes): no CRC_EXTRA known here, so its length is trusted. Its
   // payload holds start bytes that must not be taken for frames.
-  Bytes payload(28, 0xFD);
-  const Bytes attitude = build_frame(2, 30, 39, payload, 1, 1, 1);
+  Bytes payload(31, 0xFD);
+  const Bytes sys_status = build_frame(2, 1, 124, payload, 1, 1, 1);
   const Bytes odometry_v1 = build_frame(1, 200, 0, Bytes(20, 0xFE), 2, 1, 1);
   FrameParser parser;
-  const auto seen = parse(parser, concat({attitude, odometry_v1, heartbeat_frame(3)}));
+  const auto seen = parse(parser, concat({sys_status, odometry_v1, heartbeat_frame(3)}));
   ASSERT_EQ(seen.size(), 1u);
   EXPECT_EQ(seen[0].seq, 3);
   EXPECT_EQ(parser.counts().unknown_ids, 2u);
   EXPECT_EQ(parser.counts().bytes_discarded, 0u);
+}
+
+// ATTITUDE is read (the local frame is levelled with it): checked with its CRC_EXTRA 39.
+TEST(MavlinkParser, AttitudeIsCheckedAndReadBack) {
+  Bytes payload(28, 0);
+  const float roll = 0.0312f, pitch = -0.0187f;
+  std::memcpy(payload.data() + 4, &roll, 4);  // both targets are little-endian
+  std::memcpy(payload.data() + 8, &pitch, 4);
+  FrameParser parser;
+  auto seen = parse(parser, concat({build_frame(2, 30, 39, payload, 5, 1, 1), build_frame(2, 30, 38, payload, 6, 1, 1)}));
+  ASSERT_EQ(seen.size(), 1u) << "the one with the wrong CRC_EXTRA is refused";
+  EXPECT_EQ(parser.counts().crc_errors, 1u);
+  std::array<std::uint8_t, kMaxPayloadBytes> zero_extended{};
+  std::copy(seen[0].payload.begin(), seen[0].payload.end(), zero_extended.begin());
+  const Attitude a = unpack_attitude(zero_extended);
+  EXPECT_EQ(a.roll, roll);
+  EXPECT_EQ(a.pitch, pitch);
 }
 
 TEST(MavlinkParser, SignedFramesAreSkippedWithTheirSignature) {
@@ -239,7 +256,7 @@ TEST(MavlinkParser, SignedFramesAreSkippedWithTheirSignature) {
   const Bytes signature = {0x01, 0xFD, 0xFE, 0xFD, 0x00, 0x00, 0x00, 0xFD, 0xFE, 0xFD, 0x09, 0xFD, 0xFD};
   const Bytes signed_hb =
       build_frame(2, 0, 50, heartbeat_payload(2, 3, 0), 1, 1, 1, kIncompatFlagSigned, signature);
-  const Bytes signed_unknown = build_frame(2, 30, 39, Bytes(28, 7), 2, 1, 1, kIncompatFlagSigned, signature);
+  const Bytes signed_unknown = build_frame(2, 1, 124, Bytes(31, 7), 2, 1, 1, kIncompatFlagSigned, signature);
   for (std::size_t chunk : {0u, 1u, 3u}) {
     FrameParser parser;
     const auto seen = parse(parser, concat({signed_hb, signed_unknown, heartbeat_frame(3)}), chunk);

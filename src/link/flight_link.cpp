@@ -23,6 +23,9 @@ constexpr int kOriginRepeats = 5;
 constexpr std::int64_t kOriginPeriodNs = 1'000'000'000;
 // PX4 uses a TIMESYNC round trip only below this (Timesync.hpp MAX_RTT_SAMPLE, 10 ms).
 constexpr std::int64_t kPx4MaxRttNs = 10'000'000;
+// An ATTITUDE older than this at the first pair says nothing about the vehicle then (PX4 streams
+// it at 20-50 Hz in Onboard mode, ArduPilot at its SRn_EXTRA1 rate).
+constexpr std::int64_t kAttitudeFreshNs = 500'000'000;
 // The receiver answers TIMESYNC requests: above the pipeline's threads (SCHED_OTHER) so that
 // an answer never waits for a busy core (measured: up to 7 ms on an idle 2-core x86 without).
 constexpr int kReceiverPriority = 10;
@@ -122,6 +125,7 @@ void FlightLink::send_message(const Message& message) {
 void FlightLink::send_pair(const PairResult& pair) {
   if (pair.status == Status::StampNotIncreasing) return;  // a dropped frame: nothing happened
   if (pair.status == Status::SensorLost) builder_.note_sensor_reset();
+  if (!builder_.has_pose() && pair.status == Status::Ok) level_local_frame();
   builder_.add(pair);
   // An autopilot keeps its samples in time order (PX4's ring buffer, EKF3's): a message not
   // after the last one sent (a host clock step) is held back and counted, never sent.
@@ -176,6 +180,13 @@ bool FlightLink::handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns
       sender_confirmed = true;
     }
     if (watch_.state(now_ns).identity != before) timesync_.reset();  // another autopilot, another clock
+    const AutopilotIdentity& followed = watch_.state(now_ns).identity;
+    if (frame.msgid == mavlink::Attitude::kId && frame.sysid == followed.system_id &&
+        frame.compid == followed.component_id) {  // the autopilot's own, not a gimbal's
+      const mavlink::Attitude a = mavlink::unpack_attitude(frame.payload);
+      if (std::isfinite(a.roll) && std::isfinite(a.pitch)) attitude_ = {a.roll, a.pitch, now_ns};
+      return true;
+    }
     if (frame.msgid != mavlink::Timesync::kId) return true;
     const mavlink::Timesync m = mavlink::unpack_timesync(frame.payload);
     if (!addressed_to(m, own_system, own_component)) return true;
@@ -229,6 +240,27 @@ void FlightLink::tick(std::int64_t now_ns) {
   }
   note_changes(now_ns);
   send_origin(now_ns);
+}
+
+void FlightLink::level_local_frame() {
+  HeardAttitude a;
+  {
+    std::lock_guard lock(state_mutex_);
+    a = attitude_;
+  }
+  char text[300];
+  if (a.heard_ns > 0 && steady_now_ns() - a.heard_ns < kAttitudeFreshNs &&
+      builder_.level_initial_attitude(a.roll_rad, a.pitch_rad)) {
+    std::snprintf(text, sizeof text,
+                  "local frame levelled with the autopilot's attitude at the first pair: roll %.2f deg, pitch %.2f deg "
+                  "(%.9g rad, %.9g rad)",
+                  a.roll_rad / kDegToRad, a.pitch_rad / kDegToRad, a.roll_rad, a.pitch_rad);
+  } else {
+    std::snprintf(text, sizeof text,
+                  "no ATTITUDE from the autopilot at the first pair: the local frame is the body frame at the first "
+                  "frame, level only if the vehicle was");
+  }
+  news_.push_back(text);
 }
 
 void FlightLink::send_origin(std::int64_t now_ns) {

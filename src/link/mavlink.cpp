@@ -133,6 +133,31 @@ void pack_payload(const SetHomePosition& m, std::span<std::uint8_t, SetHomePosit
   put_u64(out, SetHomePosition::kTimeUsecOffset, m.time_usec);
 }
 
+void pack_payload(const Attitude& m, std::span<std::uint8_t, Attitude::kPayloadBytes> out) {
+  put_u32(out, Attitude::kTimeBootMsOffset, m.time_boot_ms);
+  put_f32(out, Attitude::kRollOffset, m.roll);
+  put_f32(out, Attitude::kPitchOffset, m.pitch);
+  put_f32(out, Attitude::kYawOffset, m.yaw);
+  put_f32(out, Attitude::kRollspeedOffset, m.rollspeed);
+  put_f32(out, Attitude::kPitchspeedOffset, m.pitchspeed);
+  put_f32(out, Attitude::kYawspeedOffset, m.yawspeed);
+}
+
+Attitude unpack_attitude(std::span<const std::uint8_t, kMaxPayloadBytes> payload) {
+  const auto f32 = [&](std::size_t offset) {
+    return std::bit_cast<float>(static_cast<std::uint32_t>(get_le(payload, offset, 4)));
+  };
+  Attitude m;
+  m.time_boot_ms = static_cast<std::uint32_t>(get_le(payload, Attitude::kTimeBootMsOffset, 4));
+  m.roll = f32(Attitude::kRollOffset);
+  m.pitch = f32(Attitude::kPitchOffset);
+  m.yaw = f32(Attitude::kYawOffset);
+  m.rollspeed = f32(Attitude::kRollspeedOffset);
+  m.pitchspeed = f32(Attitude::kPitchspeedOffset);
+  m.yawspeed = f32(Attitude::kYawspeedOffset);
+  return m;
+}
+
 std::optional<std::uint8_t> sent_crc_extra(std::uint32_t msgid) {
   switch (msgid) {
     case Heartbeat::kId: return Heartbeat::kCrcExtra;
@@ -199,5 +224,6 @@ std::size_t Framer::encode(const Odometry& m, FrameSpan out) { return encode_mes
 std::size_t Framer::encode(const VisionPositionDelta& m, FrameSpan out) { return encode_message(m, out); }
 std::size_t Framer::encode(const SetGpsGlobalOrigin& m, FrameSpan out) { return encode_message(m, out); }
 std::size_t Framer::encode(const SetHomePosition& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const Attitude& m, FrameSpan out) { return encode_message(m, out); }
 
 }  // namespace rgbdo::mavlink

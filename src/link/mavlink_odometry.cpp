@@ -105,8 +105,17 @@ void OdometryMessageBuilder::add(const PairResult& pair) {
     pending_reset_ = false;
   }
   integrate(last_motion_);
+  has_pose_ = true;
   compose_delta(last_motion_);
   tracking_ = Tracking::Ok;
+}
+
+bool OdometryMessageBuilder::level_initial_attitude(double roll_rad, double pitch_rad) {
+  if (has_pose_) return false;
+  T_local_body_.linear() = (Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
+                               .toRotationMatrix();
+  return true;
 }
 
 void OdometryMessageBuilder::compose_delta(const BodyMotion& m) {

@@ -9,6 +9,7 @@ std::optional<std::uint8_t> crc_extra_of(std::uint32_t msgid) {
   switch (msgid) {
     case Heartbeat::kId: return Heartbeat::kCrcExtra;
     case Timesync::kId: return Timesync::kCrcExtra;
+    case Attitude::kId: return Attitude::kCrcExtra;
     default: return std::nullopt;
   }
 }

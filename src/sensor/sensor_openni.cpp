@@ -251,60 +251,69 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     problem = "all " + std::to_string(s.colour_frames_in_file) + " colour frames of the file read";
     return false;
   }
-  while (!(have_colour && depth_at_or_after(colour_t))) {
-    // A recording holds its next depth frame unless all were read: wait for it as for any frame,
-    // so that pairing never depends on how fast the player decodes.
-    if (have_colour && s.playback && s.depth_count >= s.depth_frames_in_file) break;
-    const int ready = wait_for_stream(have_colour && !s.playback ? s.options.pairing_wait_ms
-                                                                  : s.options.frame_timeout_ms);
-    if (ready == -2) {
-      if (have_colour && !s.interrupted) break;  // unplugged: the frame in hand goes out first
-      problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
-      return false;
-    }
-    if (ready < 0) {
-      if (have_colour) break;  // no later depth: pair with what there is
-      problem = "no frame from the sensor for " + std::to_string(s.options.frame_timeout_ms) + " ms (unplugged?)";
-      return false;
-    }
-    if (streams[ready]->readFrame(&frame) != openni::STATUS_OK) continue;
-    const std::int64_t t = s.to_host(frame.getTimestamp());
-    if (ready == 1) {
-      auto& slot = s.depth_history[static_cast<size_t>(s.depth_count++ % kDepthHistory)];
-      slot.t_ns = t;
-      const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
+  for (;;) {
+    while (!(have_colour && depth_at_or_after(colour_t))) {
+      // A recording holds its next depth frame unless all were read: wait for it as for any frame,
+      // so that pairing never depends on how fast the player decodes.
+      if (have_colour && s.playback && s.depth_count >= s.depth_frames_in_file) break;
+      const int ready = wait_for_stream(have_colour && !s.playback ? s.options.pairing_wait_ms
+                                                                    : s.options.frame_timeout_ms);
+      if (ready == -2) {
+        if (have_colour && !s.interrupted) break;  // unplugged: the frame in hand goes out first
+        problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
+        return false;
+      }
+      if (ready < 0) {
+        if (have_colour) break;  // no later depth: pair with what there is
+        problem = "no frame from the sensor for " + std::to_string(s.options.frame_timeout_ms) + " ms (unplugged?)";
+        return false;
+      }
+      if (streams[ready]->readFrame(&frame) != openni::STATUS_OK) continue;
+      const std::int64_t t = s.to_host(frame.getTimestamp());
+      if (ready == 1) {
+        auto& slot = s.depth_history[static_cast<size_t>(s.depth_count++ % kDepthHistory)];
+        slot.t_ns = t;
+        const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
+                          static_cast<size_t>(frame.getStrideInBytes()));
+        depth_to_metres(raw, s.depth_m_per_unit, slot.depth_m);
+        continue;
+      }
+      const int index = frame.getFrameIndex();
+      if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
+      s.last_colour_index = index;
+      const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                         static_cast<size_t>(frame.getStrideInBytes()));
-      depth_to_metres(raw, s.depth_m_per_unit, slot.depth_m);
-      continue;
+      ++s.colour_frames_read;
+      if (!have_colour) {
+        colour_to_gray(rgb, true, out.gray);
+        have_colour = true;
+        colour_t = t;
+        continue;
+      }
+      // A newer colour frame while the one in hand waits for a depth at or after it. It is kept
+      // for the next call, never replaces the one in hand: the depth nearest in time may be the
+      // one before (the sensor's streams lead and lag each other by up to half a frame).
+      if (s.has_pending) {
+        // Already one waiting behind it: the frame in hand had two frame times to get a depth
+        // and did not. Given up and counted, so that no frame goes unseen.
+        ++s.replaced;
+        cv::swap(out.gray, s.pending_gray);
+        colour_t = s.pending_t_ns;
+      }
+      colour_to_gray(rgb, true, s.pending_gray);
+      s.pending_t_ns = t;
+      s.has_pending = true;
+      // A depth frame within 20 ms is in hand: one still to come would be later than this
+      // newer colour frame's arrival, and no nearer.
+      if (nearest_depth(colour_t)) break;
     }
-    const int index = frame.getFrameIndex();
-    if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
-    s.last_colour_index = index;
-    const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
-                      static_cast<size_t>(frame.getStrideInBytes()));
-    ++s.colour_frames_read;
-    if (!have_colour) {
-      colour_to_gray(rgb, true, out.gray);
-      have_colour = true;
-      colour_t = t;
-      continue;
-    }
-    // A newer colour frame while the one in hand waits for a depth at or after it. It is kept
-    // for the next call, never replaces the one in hand: the depth nearest in time may be the
-    // one before (the sensor's streams lead and lag each other by up to half a frame).
-    if (s.has_pending) {
-      // Already one waiting behind it: the frame in hand had two frame times to get a depth
-      // and did not. Given up and counted, so that no frame goes unseen.
-      ++s.replaced;
-      cv::swap(out.gray, s.pending_gray);
-      colour_t = s.pending_t_ns;
-    }
-    colour_to_gray(rgb, true, s.pending_gray);
-    s.pending_t_ns = t;
-    s.has_pending = true;
-    // A depth frame within 20 ms is in hand: one still to come would be later than this
-    // newer colour frame's arrival, and no nearer.
-    if (nearest_depth(colour_t)) break;
+    // No depth within 20 ms for the frame in hand, and a newer frame waits behind it: give the
+    // older one up (counted) rather than send a frame without depth, which fails two pairs.
+    if (nearest_depth(colour_t) || !s.has_pending) break;
+    ++s.replaced;
+    cv::swap(out.gray, s.pending_gray);
+    colour_t = s.pending_t_ns;
+    s.has_pending = false;
   }
   out.t_colour_ns = colour_t;
   out.host_lead_ns = s.clock.lead_ns();  // as proved by every frame read so far, this one's depth too

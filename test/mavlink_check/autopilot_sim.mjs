@@ -30,6 +30,7 @@
 //       [--reorder P] [--garbage P] [--seed N] [--start-after-ms T] [--converged-file FILE]
 //       [--expect-converged] [--silent-after-answers N] [--silent-for-heartbeats N]
 //       [--exit-after-heartbeats N] [--idle-exit-ms T] [--max-ms T] [--ardupilot]
+//       [--attitude ROLL,PITCH | --attitude none]
 //   --udp-listen PORT   the program sends to us (udp://127.0.0.1:PORT); we answer the address
 //                       its datagrams come from, from the moment the first one arrives
 //   --udp-send H:P      the program listens (udpin://H:P); we speak first
@@ -40,6 +41,8 @@
 //   --silent-for-heartbeats N  for as long as the program sends N heartbeats, then speak again
 //   --exit-after-heartbeats N  with the above: exit after N more program heartbeats
 //   --idle-exit-ms T    exit once the program has sent nothing for T ms (default 3000)
+//   --attitude R,P      ATTITUDE streamed at 10 Hz with this roll and pitch [rad] (default
+//                       0.0312,-0.0187; none: not streamed)
 //   --ardupilot         HEARTBEAT as ArduPilot (MAV_AUTOPILOT_ARDUPILOTMEGA); the EKF origin the
 //                       program sends (SET_GPS_GLOBAL_ORIGIN, SET_HOME_POSITION) goes to the result
 // Exit status: 0 all assertions held, 1 some did not (see the result's "failures"), 64 usage.
@@ -72,7 +75,7 @@ function usage(msg) {
 function parseArgs(argv) {
   const o = {
     offsetNs: 1_234_567_000_000n, timesyncHz: 10, loss: 0, reorder: 0, garbage: 0, seed: 1, startAfterMs: 0,
-    expectConverged: false, silentAfterAnswers: null, silentForHeartbeats: 3, exitAfterHeartbeats: null,
+    expectConverged: false, attitude: [0.0312, -0.0187], silentAfterAnswers: null, silentForHeartbeats: 3, exitAfterHeartbeats: null,
     idleExitMs: 3000, maxMs: 300_000,
   };
   const num = (a, v) => { if (v === undefined || !/^-?\d+(\.\d+)?$/.test(v)) usage(`${a} needs a number`); return Number(v); };
@@ -101,6 +104,7 @@ function parseArgs(argv) {
       case '--idle-exit-ms': o.idleExitMs = num(a, next()); break;
       case '--max-ms': o.maxMs = num(a, next()); break;
       case '--ardupilot': o.ardupilot = true; break;
+      case '--attitude': { const v = next(); o.attitude = v === 'none' ? null : v.split(',').map(Number); break; }
       default: usage(`unknown argument '${a}'`);
     }
   }
@@ -176,7 +180,7 @@ function main() {
     trueOffsetUs: truthUs, heartbeatsSent: 0, requestsSent: 0, answersReceived: 0, answersUsed: 0,
     answersRttRejected: 0, answersNotOurs: 0, causalityViolations: 0, ourAnswersToProgram: 0,
     programHeartbeats: 0, programRequests: 0, odometry: 0, framesFromProgram: 0, badFromProgram: 0,
-    origins: [], homePositions: [], visionPositionDelta: 0,
+    origins: [], homePositions: [], visionPositionDelta: 0, attitudeSent: 0,
     rules: { staleFused: 0, notAfterPrevious: 0, deltaDropped: 0, beforeOrigin: 0 },
     framesDropped: 0, framesReordered: 0, garbageBytes: 0, corruptFrames: 0, unknownFrames: 0, v1Frames: 0,
     signedFrames: 0, silentPeriods: 0, converged: false, convergedAfterSamples: null, offsetUs: null,
@@ -217,9 +221,9 @@ function main() {
     } else if (kind < 0.65) {  // a frame cut short: what follows it must still be found
       const b = frame(heartbeat());
       r.corruptFrames++; parts.push(b.subarray(0, 3 + Math.floor(random() * (b.length - 4))));
-    } else if (kind < 0.8) {  // a message the program does not read (ATTITUDE)
-      const m = new common.Attitude();
-      m.timeBootMs = Number((ourNowNs() / 1_000_000n) & 0xFFFFFFFFn); m.roll = random(); m.pitch = -random(); m.yaw = 3 * random();
+    } else if (kind < 0.8) {  // a message the program does not read (SCALED_PRESSURE)
+      const m = new common.ScaledPressure();
+      m.timeBootMs = Number((ourNowNs() / 1_000_000n) & 0xFFFFFFFFn); m.pressAbs = 1013 + random(); m.temperature = 2000;
       r.unknownFrames++; parts.push(frame(m));
     } else if (kind < 0.9) {  // MAVLink 1 heartbeat, as on a port left at MAVLink 1
       r.v1Frames++; parts.push(frame(heartbeat(), protocolV1));
@@ -360,8 +364,18 @@ function main() {
       r.requestsSent++;
       send(frame(m));
     };
+    // ATTITUDE at 10 Hz, as PX4 streams it on an Onboard port: the program levels its local
+    // frame with the roll and pitch it holds at the first pair.
+    const attitude = () => {
+      if (silentUntilHeartbeats !== null) return;
+      const m = new common.Attitude();
+      m.timeBootMs = Number((ourNowNs() / 1_000_000n) & 0xFFFFFFFFn);
+      [m.roll, m.pitch] = opt.attitude; m.yaw = 1.2;
+      r.attitudeSent++; send(frame(m));
+    };
     beat();
     timers.push(setInterval(beat, 1000));
+    if (opt.attitude) { attitude(); timers.push(setInterval(attitude, 100)); }
     if (opt.timesyncHz > 0) timers.push(setInterval(ask, 1000 / opt.timesyncHz));
   }
 

@@ -22,7 +22,7 @@
 //     dR_b [p_bc]x Jr R_bc, B's lower block R_k Jr, G as above).
 //
 // Usage: node check.mjs --decoded decoded.jsonl --log odometry.csv
-//          [--extrinsic R00,R01,R02,R10,R11,R12,R20,R21,R22,px,py,pz] [--expect-vpd | --vpd-only] [--delta-min-ms MS]
+//          [--extrinsic R00,R01,R02,R10,R11,R12,R20,R21,R22,px,py,pz] [--expect-vpd | --vpd-only] [--delta-min-ms MS] [--initial-rpy ROLL,PITCH]
 //          [--velocity-frame previous|current] [--jacobians first-order|exact]
 //          [--sysid 1] [--compid 197] [--min-heartbeats 1] [--allow-msgid ID]... [--allow-untrimmed]
 //          [--max-print 200] [--quiet]
@@ -45,7 +45,7 @@ const MAV_ESTIMATOR_TYPE_VISION = 2;  // common.xml MAV_ESTIMATOR_TYPE: 2 VISION
 function usage(msg) {
   process.stderr.write(`check.mjs: ${msg}\n` +
     'usage: node check.mjs --decoded decoded.jsonl --log odometry.csv [--extrinsic R00,..,R22,px,py,pz]\n' +
-    '       [--expect-vpd | --vpd-only] [--delta-min-ms MS] [--sysid N] [--compid N] [--min-heartbeats N] [--allow-msgid ID]...\n' +
+    '       [--expect-vpd | --vpd-only] [--delta-min-ms MS] [--initial-rpy ROLL,PITCH] [--sysid N] [--compid N] [--min-heartbeats N] [--allow-msgid ID]...\n' +
     '       [--allow-untrimmed] [--velocity-frame previous|current] [--jacobians first-order|exact]\n' +
     '       [--max-print N] [--quiet]\n');
   process.exit(64);
@@ -76,6 +76,7 @@ function parseArgs(argv) {
       case '--expect-vpd': o.expectVpd = true; break;
       case '--vpd-only': o.expectVpd = true; o.vpdOnly = true; break;
       case '--delta-min-ms': o.deltaMinMs = Number(next()); break;
+      case '--initial-rpy': o.initialRpy = next().split(',').map(Number); break;
       case '--sysid': o.sysid = intArg(a, next(), 0, 255); break;
       case '--compid': o.compid = intArg(a, next(), 0, 255); break;
       case '--min-heartbeats': o.minHeartbeats = intArg(a, next(), 0, 1e9); break;
@@ -353,7 +354,15 @@ function main() {
   const { Rbc, pbc } = opt;
   const exact = opt.jacobians === 'exact';
   const current = opt.velocityFrame === 'current';
-  let R = I3.slice();             // R_lb
+  // R_lb: the body's attitude in the local frame, levelled at the start (--initial-rpy: the
+  // autopilot's roll and pitch the program reported using) as Ry(pitch) Rx(roll).
+  let R = I3.slice();
+  if (opt.initialRpy) {
+    const [r0, p0] = opt.initialRpy;
+    const Rx = [1, 0, 0, 0, Math.cos(r0), -Math.sin(r0), 0, Math.sin(r0), Math.cos(r0)];
+    const Ry = [Math.cos(p0), 0, Math.sin(p0), 0, 1, 0, -Math.sin(p0), 0, Math.cos(p0)];
+    R = mul3(Ry, Rx);
+  }
   let p = [0, 0, 0];              // position of body in local frame
   let P = new Array(36).fill(0);  // covariance of (position, orientation), left/local perturbations
   let pathLen = 0;

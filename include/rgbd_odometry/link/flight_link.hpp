@@ -77,6 +77,7 @@ class FlightLink {
   bool handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns, bool& sender_confirmed);
   void note_changes(std::int64_t now_ns);
   void send_origin(std::int64_t now_ns);  // link.ekf_origin, while sends are due
+  void level_local_frame();  // at the first good pair: from the autopilot's latest ATTITUDE
   double advised_ev_delay_ms(const TimesyncEstimate& offset) const;
 
   LinkConfig config_;
@@ -99,6 +100,10 @@ class FlightLink {
   AutopilotWatch watch_;
   TimesyncEstimator timesync_;
   mavlink::ParserCounts parser_counts_;
+  struct HeardAttitude {
+    double roll_rad = 0, pitch_rad = 0;
+    std::int64_t heard_ns = 0;  // 0: none heard
+  } attitude_;  // the followed autopilot's latest ATTITUDE
   std::uint64_t answered_ = 0, requests_sent_ = 0;
 
   // The receiver thread's own.

@@ -3,7 +3,7 @@
 // carries no generated MAVLink library. The messages it needs only: HEARTBEAT
 // (common.xml/minimal.xml), TIMESYNC, ODOMETRY, SET_GPS_GLOBAL_ORIGIN, SET_HOME_POSITION
 // (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml). Received frames are split and
-// checked by mavlink_parser.hpp; HEARTBEAT and TIMESYNC are also read here.
+// checked by mavlink_parser.hpp; HEARTBEAT, TIMESYNC and ATTITUDE are also read here.
 //
 // Frame (MAVLink 2, unsigned):
 //   0xFD | len | incompat_flags=0 | compat_flags=0 | seq | sysid | compid | msgid (3 B, LE)
@@ -195,6 +195,20 @@ struct SetHomePosition {  // #243, common.xml: home at the origin, so that RTL h
 static_assert(SetHomePosition::kTimeUsecOffset + 8 == SetHomePosition::kPayloadBytes);
 
 
+struct Attitude {  // #30, common.xml: received only, to level the local frame at the first pair
+  static constexpr std::uint32_t kId = 30;
+  static constexpr std::uint8_t kCrcExtra = 39;
+  static constexpr std::size_t kPayloadBytes = 28;
+
+  std::uint32_t time_boot_ms = 0;  // [ms] the autopilot's clock
+  float roll = 0, pitch = 0, yaw = 0;  // [rad] the FRD body in the autopilot's NED frame
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;  // [rad/s]
+
+  static constexpr std::size_t kTimeBootMsOffset = 0, kRollOffset = 4, kPitchOffset = 8, kYawOffset = 12,
+                               kRollspeedOffset = 16, kPitchspeedOffset = 20, kYawspeedOffset = 24;
+};
+static_assert(Attitude::kYawspeedOffset + 4 == Attitude::kPayloadBytes);
+
 // ---- payloads: the full, untrimmed wire image of one message ---------------------------
 void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloadBytes> out);
 void pack_payload(const Timesync& m, std::span<std::uint8_t, Timesync::kPayloadBytes> out);
@@ -202,11 +216,13 @@ void pack_payload(const Odometry& m, std::span<std::uint8_t, Odometry::kPayloadB
 void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPositionDelta::kPayloadBytes> out);
 void pack_payload(const SetGpsGlobalOrigin& m, std::span<std::uint8_t, SetGpsGlobalOrigin::kPayloadBytes> out);
 void pack_payload(const SetHomePosition& m, std::span<std::uint8_t, SetHomePosition::kPayloadBytes> out);
+void pack_payload(const Attitude& m, std::span<std::uint8_t, Attitude::kPayloadBytes> out);  // tests send it
 
 // The received messages, from a payload already zero-extended to at least the message's full
 // length (mavlink_parser.hpp hands out kMaxPayloadBytes).
 [[nodiscard]] Heartbeat unpack_heartbeat(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
 [[nodiscard]] Timesync unpack_timesync(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
+[[nodiscard]] Attitude unpack_attitude(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
 
 // ---- checksum ---------------------------------------------------------------------------
 inline constexpr std::uint16_t kCrcInit = 0xFFFF;
@@ -236,6 +252,7 @@ class Framer {
   [[nodiscard]] std::size_t encode(const VisionPositionDelta& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const SetGpsGlobalOrigin& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const SetHomePosition& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const Attitude& m, FrameSpan out);  // tests send it
 
   // The framing alone, for a payload of `payload_bytes` already written at out[kHeaderBytes]:
   // trims its trailing zeros, writes header and checksum, returns the frame length.

@@ -23,7 +23,8 @@
 //   (x, y, z, roll, pitch, yaw), ZYX Euler angles R = Rz(yaw) Ry(pitch) Rx(roll), through the
 //   Jacobian of (roll, pitch, yaw) with respect to dth (singular at pitch = +-90 deg).
 //   Camera odometry sees no gravity: the local frame is level only if the vehicle was level
-//   at the first frame.
+//   at the first frame, or if level_initial_attitude() was given its roll and pitch then
+//   (the autopilot's ATTITUDE): the pose starts at Ry(pitch) Rx(roll) instead of identity.
 // - Velocities (ODOMETRY) are the mean over the pair, expressed in the body frame at the
 //   current frame like VISION_POSITION_DELTA.position_delta: v = dR_b^T t_b / dt [m/s],
 //   angular rate w = r_b / dt [rad/s] (a rotation vector is the same in both body frames),
@@ -130,6 +131,12 @@ class OdometryMessageBuilder {
   [[nodiscard]] std::optional<mavlink::VisionPositionDelta> vision_position_delta() const;
   [[nodiscard]] mavlink::Heartbeat heartbeat() const;
 
+  // Before the first good pair only: the body's roll and pitch at the first frame (yaw 0), so
+  // that the local frame is level (its z along gravity) however the vehicle stood. False
+  // (nothing changed) once a pose has been integrated.
+  bool level_initial_attitude(double roll_rad, double pitch_rad);
+  bool has_pose() const { return has_pose_; }
+
   const Eigen::Isometry3d& pose() const { return T_local_body_; }  // body in the local frame
   const Matrix6d& pose_covariance() const { return P_; }           // of the left (dp, dth)
   std::uint8_t reset_counter() const { return reset_counter_; }
@@ -148,6 +155,7 @@ class OdometryMessageBuilder {
   Matrix6d P_ = Matrix6d::Zero();
   std::uint8_t reset_counter_ = 0;  // uint8 arithmetic: wraps at 256 like the field
   bool pending_reset_ = false;      // failed pairs seen since the last good one
+  bool has_pose_ = false;           // a good pair has been integrated
   Tracking tracking_ = Tracking::NotStarted;
   // The latest pair.
   std::int64_t t_prev_ns_ = 0, t_curr_ns_ = 0;

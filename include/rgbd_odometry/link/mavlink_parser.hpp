@@ -1,7 +1,8 @@
 #pragma once
 // Received MAVLink: splits a byte stream (a serial line, the datagrams of a UDP socket) into
 // checked frames. MAVLink 2 (0xFD) and MAVLink 1 (0xFE) framing; the checksum with CRC_EXTRA
-// is verified for the messages this program understands (HEARTBEAT, TIMESYNC: mavlink.hpp);
+// is verified for the messages this program understands (HEARTBEAT, TIMESYNC, ATTITUDE:
+// mavlink.hpp);
 // a frame of any other id cannot be checked and is skipped by its length field.
 //
 // Resynchronisation: a frame that fails its checksum (or has incompat flags this parser does
