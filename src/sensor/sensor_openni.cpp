@@ -3,9 +3,11 @@
 #include <OpenNI.h>
 
 #include <array>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "rgbd_odometry/core/clock.hpp"
@@ -214,6 +216,23 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     }
     return best && std::llabs(best->t_ns - t) <= kMaxColourDepthOffsetNs ? best : nullptr;
   };
+  // The depth frame in hand before colour time t is the nearest for good when the stream's next
+  // one, due a depth interval after the newest, would be farther: no need to wait for it (at
+  // 30 Hz that wait is most of a frame's latency when depth leads colour).
+  const auto earlier_depth_is_nearest = [&](std::int64_t t) {
+    if (kept() < 2) return false;
+    // The stream's period: the shortest interval among the kept frames (one the sensor
+    // skipped makes a double one, which must not push the next frame's estimate out).
+    std::array<std::int64_t, kDepthHistory> times{};
+    for (int k = 0; k < kept(); ++k) times[static_cast<size_t>(k)] = s.depth_history[static_cast<size_t>(k)].t_ns;
+    std::sort(times.begin(), times.begin() + kept());
+    std::int64_t period = std::numeric_limits<std::int64_t>::max();
+    for (int k = 1; k < kept(); ++k) period = std::min(period, times[static_cast<size_t>(k)] - times[static_cast<size_t>(k - 1)]);
+    if (period <= 0 || period > 4 * kMaxColourDepthOffsetNs) return false;  // no estimate
+    const std::int64_t next_due = times[static_cast<size_t>(kept() - 1)] + period;
+    const Impl::DepthSlot* best = nearest_depth(t);
+    return best && best->t_ns <= t && t - best->t_ns <= next_due - t;
+  };
   bool have_colour = false;
   std::int64_t colour_t = 0;
   if (s.has_pending) {  // the frame that came while the last one waited: this call's
@@ -252,7 +271,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     return false;
   }
   for (;;) {
-    while (!(have_colour && depth_at_or_after(colour_t))) {
+    while (!(have_colour && (depth_at_or_after(colour_t) || earlier_depth_is_nearest(colour_t)))) {
       // A recording holds its next depth frame unless all were read: wait for it as for any frame,
       // so that pairing never depends on how fast the player decodes.
       if (have_colour && s.playback && s.depth_count >= s.depth_frames_in_file) break;
