@@ -198,7 +198,7 @@ struct Config {
   LogConfig log;
   BodyConfig body;
   LinkConfig link;
-  std::uint64_t seed = 1;  // with the frame-pair index, seeds RANSAC and the perturbations
+  std::uint64_t seed = 1;  // with the two frames' content, seeds RANSAC and the perturbations (pair_estimator.cpp)
 };
 
 // A bad configuration value or file; the message names the key or file.
