@@ -180,7 +180,7 @@ bool FlightLink::handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns
       sender_confirmed = true;
     }
     if (watch_.state(now_ns).identity != before) timesync_.reset();  // another autopilot, another clock
-    const AutopilotIdentity& followed = watch_.state(now_ns).identity;
+    const AutopilotIdentity followed = watch_.state(now_ns).identity;
     if (frame.msgid == mavlink::Attitude::kId && frame.sysid == followed.system_id &&
         frame.compid == followed.component_id) {  // the autopilot's own, not a gimbal's
       const mavlink::Attitude a = mavlink::unpack_attitude(frame.payload);
