@@ -221,15 +221,20 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   // 30 Hz that wait is most of a frame's latency when depth leads colour).
   const auto earlier_depth_is_nearest = [&](std::int64_t t) {
     if (kept() < 2) return false;
-    // The stream's period: the shortest interval among the kept frames (one the sensor
-    // skipped makes a double one, which must not push the next frame's estimate out).
-    std::array<std::int64_t, kDepthHistory> times{};
-    for (int k = 0; k < kept(); ++k) times[static_cast<size_t>(k)] = s.depth_history[static_cast<size_t>(k)].t_ns;
-    std::sort(times.begin(), times.begin() + kept());
-    std::int64_t period = std::numeric_limits<std::int64_t>::max();
-    for (int k = 1; k < kept(); ++k) period = std::min(period, times[static_cast<size_t>(k)] - times[static_cast<size_t>(k - 1)]);
-    if (period <= 0 || period > 4 * kMaxColourDepthOffsetNs) return false;  // no estimate
-    const std::int64_t next_due = times[static_cast<size_t>(kept() - 1)] + period;
+    // The stream's period: the shortest interval between kept frames (one the sensor skipped
+    // makes a double one, which must not push the next frame's estimate out). Four frames at
+    // most: every pair is compared.
+    std::int64_t period = std::numeric_limits<std::int64_t>::max(), newest = 0;
+    for (int i = 0; i < kept(); ++i) {
+      const std::int64_t ti = s.depth_history[static_cast<size_t>(i)].t_ns;
+      newest = i == 0 ? ti : std::max(newest, ti);
+      for (int j = i + 1; j < kept(); ++j) {
+        const std::int64_t gap = std::llabs(ti - s.depth_history[static_cast<size_t>(j)].t_ns);
+        if (gap > 0) period = std::min(period, gap);
+      }
+    }
+    if (period > 4 * kMaxColourDepthOffsetNs) return false;  // no estimate
+    const std::int64_t next_due = newest + period;
     const Impl::DepthSlot* best = nearest_depth(t);
     return best && best->t_ns <= t && t - best->t_ns <= next_due - t;
   };
