@@ -135,6 +135,27 @@ TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
   EXPECT_NE(report.find("\"visionPositionDelta\":19"), std::string::npos) << report;
 }
 
+// `recording` replayed with the shipped fr1 configuration over real UDP to the independent
+// decoder, which writes dir/decoded.jsonl; the log is dir/odometry.csv, the summary in out.
+void replay_over_udp(const fs::path& recording, const fs::path& dir, std::string& out) {
+  const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
+                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
+                                       (dir / "decoded.jsonl").string()},
+                                      -1);
+  const std::string ready = wait_for_ready(dir / "ready");
+  ASSERT_NE(ready.rfind(':'), std::string::npos) << "decoder not ready: '" << ready << "'";
+  RunOptions o;
+  o.source = "tum:" + recording.string();
+  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
+  o.log_path = (dir / "odometry.csv").string();
+  o.link = "udp://127.0.0.1:" + ready.substr(ready.rfind(':') + 1);
+  o.quiet = true;
+  std::ostringstream summary, err;
+  ASSERT_EQ(run_odometry(o, summary, err), 0) << err.str();
+  EXPECT_EQ(wait_exit(decoder), 0);
+  out = summary.str();
+}
+
 // GIVEN a recording that lists one colour frame twice, WHEN replayed over UDP, THEN the
 // repeat is logged as stamp_not_increasing and counted, never paired as an ok pair with zero
 // dt nor sent: every ODOMETRY's time_usec is after the one before (check.mjs asserts it).
@@ -154,28 +175,15 @@ TEST(FlightLinkDecoded, AFrameListedTwiceIsFlaggedAndNeverSent) {
       if (!line.empty() && line[0] != '#' && ++frame == 10) out << line << "\n";  // the 10th frame twice
     }
   }
-  const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
-                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
-                                       (dir / "decoded.jsonl").string()},
-                                      -1);
-  const std::string ready = wait_for_ready(dir / "ready");
-  ASSERT_NE(ready.rfind(':'), std::string::npos) << "decoder not ready: '" << ready << "'";
-  RunOptions o;
-  o.source = "tum:" + recording.string();
-  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
-  o.log_path = (dir / "odometry.csv").string();
-  o.link = "udp://127.0.0.1:" + ready.substr(ready.rfind(':') + 1);
-  o.quiet = true;
-  std::ostringstream out, err;
-  ASSERT_EQ(run_odometry(o, out, err), 0) << err.str();
-  EXPECT_EQ(wait_exit(decoder), 0);
+  std::string out;
+  ASSERT_NO_FATAL_FAILURE(replay_over_udp(recording, dir, out));
   std::ifstream log(dir / "odometry.csv");
   int rows = 0, flagged = 0;
   for (std::string line; std::getline(log, line); ++rows) flagged += line.find(",stamp_not_increasing,") != std::string::npos;
   EXPECT_EQ(rows, kPairs + 2) << "the header, 39 pairs and the flagged repeat";
   EXPECT_EQ(flagged, 1);
-  EXPECT_NE(out.str().find("39 pairs, 39 ok"), std::string::npos) << out.str();
-  EXPECT_NE(out.str().find("1 dropped for a capture time not after the previous frame's"), std::string::npos) << out.str();
+  EXPECT_NE(out.find("39 pairs, 39 ok"), std::string::npos) << out;
+  EXPECT_NE(out.find("1 dropped for a capture time not after the previous frame's"), std::string::npos) << out;
   std::string report;
   EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
 }
@@ -201,24 +209,11 @@ TEST(FlightLinkDecoded, BlackedOutFramesSendNoPose) {
     else
       fs::create_symlink(images[i], to);
   }
-  const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
-                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
-                                       (dir / "decoded.jsonl").string()},
-                                      -1);
-  const std::string ready = wait_for_ready(dir / "ready");
-  ASSERT_NE(ready.rfind(':'), std::string::npos) << "decoder not ready: '" << ready << "'";
-  RunOptions o;
-  o.source = "tum:" + recording.string();
-  o.config_path = RGBDO_CONFIG_DIR "/tum-fr1.yaml";
-  o.log_path = (dir / "odometry.csv").string();
-  o.link = "udp://127.0.0.1:" + ready.substr(ready.rfind(':') + 1);
-  o.quiet = true;
-  std::ostringstream out, err;
-  ASSERT_EQ(run_odometry(o, out, err), 0) << err.str();
-  EXPECT_EQ(wait_exit(decoder), 0);
+  std::string out;
+  ASSERT_NO_FATAL_FAILURE(replay_over_udp(recording, dir, out));
   // Pairs into, inside and out of the dark: 11 fail (ten dark frames, and the first bright one
   // after them pairs with a dark one); the others are ok.
-  EXPECT_NE(out.str().find("39 pairs, 28 ok, 11 failed"), std::string::npos) << out.str();
+  EXPECT_NE(out.find("39 pairs, 28 ok, 11 failed"), std::string::npos) << out;
   std::string report;
   EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
   EXPECT_NE(report.find("\"odometry\":39"), std::string::npos) << report;
