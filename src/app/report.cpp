@@ -71,8 +71,25 @@ std::string pair_line(const PairResult& r, std::size_t index, bool verbose) {
   return s.str();
 }
 
-void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const StageTimes& total,
-                   int timed_pairs, int rematched_pairs, const RealtimeStats& run) {
+void PairTallies::add(const PairResult& r) {
+  if (r.status == Status::Ok) {
+    total.detect_ms += r.times.detect_ms;
+    total.match_ms += r.times.match_ms;
+    total.backproject_ms += r.times.backproject_ms;
+    total.ransac_ms += r.times.ransac_ms;
+    total.covariance_ms += r.times.covariance_ms;
+    ++timed;
+    depth_refined += r.depth_points > 0 ? 1 : 0;
+    depth_sigma_scale_t = r.depth_sigma_scale_t;
+    depth_sigma_scale_r = r.depth_sigma_scale_r;
+  }
+  rematched += r.rematched ? 1 : 0;
+}
+
+void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const PairTallies& tallies,
+                   const RealtimeStats& run) {
+  const StageTimes& total = tallies.total;
+  const int timed_pairs = tallies.timed;
   out << "summary: " << s.pairs << " pairs, " << s.pairs - s.failed << " ok, " << s.failed << " failed";
   for (const auto& [word, n] : s.failures) out << " (" << word << ": " << n << ")";
   out << "\n";
@@ -97,8 +114,12 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
         << ", backproject " << total.backproject_ms / n << ", ransac " << total.ransac_ms / n << ", covariance "
         << total.covariance_ms / n << " ms]\n";
   }
-  if (rematched_pairs > 0)
-    out << "  matching: " << rematched_pairs << " pairs matched again over the whole image (the motion window fell short)\n";
+  if (tallies.rematched > 0)
+    out << "  matching: " << tallies.rematched << " pairs matched again over the whole image (the motion window fell short)\n";
+  if (timed_pairs > 0 && tallies.depth_sigma_scale_t > 0)
+    out << std::setprecision(1) << "  depth alignment: fused into " << tallies.depth_refined << " of " << timed_pairs
+        << " good pairs; its own sigma scaled by " << tallies.depth_sigma_scale_t << " (translation) and "
+        << tallies.depth_sigma_scale_r << " (rotation) on this sensor, learnt against the features\n";
   if (!with_groundtruth) {
     out << "  no groundtruth.txt: accuracy not evaluated\n";
     return;

@@ -113,9 +113,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     return 2;
   }
   AccuracyEvaluator evaluator(groundtruth, allowance);
-  StageTimes total;
-  int timed_pairs = 0;
-  int rematched_pairs = 0;
+  PairTallies tallies;
   size_t pair_count = 0;
   // Resources after warm-up, about halfway and at the latest sample, taken on the output thread
   // while every pipeline thread runs: a long run's summary shows whether memory, descriptors or
@@ -158,16 +156,8 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
             << " dropped: its capture time is not after the previous frame's\n";
         return;
       }
-      if (r.status == Status::Ok) {
-        integrator.add(r.T_prev_curr);
-        total.detect_ms += r.times.detect_ms;
-        total.match_ms += r.times.match_ms;
-        total.backproject_ms += r.times.backproject_ms;
-        total.ransac_ms += r.times.ransac_ms;
-        total.covariance_ms += r.times.covariance_ms;
-        ++timed_pairs;
-      }
-      rematched_pairs += r.rematched ? 1 : 0;
+      if (r.status == Status::Ok) integrator.add(r.T_prev_curr);
+      tallies.add(r);
       if (log) log->write(r);
       if (flight) flight->send_pair(r);
       if (trajectory) trajectory->write(item.t_frame_host_ns(), integrator.pose());
@@ -225,7 +215,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
       return 1;
     }
   }
-  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), total, timed_pairs, rematched_pairs, run);
+  print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), tallies, run);
   if (warm && previous) {
     const auto& halfway = doubling && doubling->frames * 2 <= previous->frames ? doubling : doubling_before;
     out << "  resources: " << describe(*warm) << "; ";

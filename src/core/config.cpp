@@ -68,6 +68,15 @@ std::vector<Param> param_table(Config& c) {
       {"covariance.pixel_sigma_px", "px", "keypoint localisation error at full resolution (integer corners: 1/sqrt(12))", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
       {"covariance.residual_variance_factor", "", "scale the noise by the fit's a-posteriori variance factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", "", "multiplies the reported covariance; 1: the noise model as it stands", &c.covariance.scale, 1e-6, 1e6},
+      {"refinement.enabled", "", "refine the feature motion by aligning the two depth maps and fuse the two by information", &c.refinement.enabled},
+      {"refinement.stride_px", "px", "the depth maps are sampled every this many pixels for the alignment", &c.refinement.stride_px, 2, 64},
+      {"refinement.iterations", "", "Gauss-Newton steps of the depth alignment at most", &c.refinement.iterations, 1, 100},
+      {"refinement.max_distance_m", "m", "a depth point further than this from its associated point is not used", &c.refinement.max_distance_m, 1e-4, 10, true},
+      {"refinement.min_points", "", "fewer associated depth points and the feature motion stands alone", &c.refinement.min_points, 10, 1000000},
+      {"refinement.cell_px", "px", "image cells whose residuals may be correlated: the alignment covariance's clusters", &c.refinement.cell_px, 8, 1e5},
+      {"refinement.sigma_scale_prior", "", "the depth alignment's sigma is scaled by factors learnt against the features; their start", &c.refinement.sigma_scale_prior, 1, 1e6},
+      {"refinement.sigma_scale_rate", "", "how far one pair may move those factors (share per pair)", &c.refinement.sigma_scale_rate, 0, 0.5},
+      {"refinement.sigma_scale_max", "", "the factors' ceiling: beyond it the sensor's depth adds nothing", &c.refinement.sigma_scale_max, 1, 1e9},
       {"sensor.fps", "Hz", "live sensor frame rate", &c.sensor.fps, 1, 120},
       {"sensor.registration", "", "hardware depth-to-colour registration", &c.sensor.registration},
       {"sensor.frame_timeout_ms", "ms", "no frame this long: the sensor is reported lost", &c.sensor.frame_timeout_ms, 100, 600000},
@@ -296,6 +305,8 @@ void validate(const Config& config) {
       (c.features.descriptor == "KAZE") != (c.features.detector == "KAZE"))
     throw ConfigError("config key 'features.descriptor': " + c.features.descriptor +
                       " descriptors need the matching (A)KAZE detector");
+  if (c.refinement.stride_px * 4 > std::min(c.camera.width, c.camera.height))
+    throw ConfigError("config key 'refinement.stride_px': fewer than 4 grid rows in the image");
   if (c.ransac.min_inliers < 3)
     throw ConfigError("config key 'ransac.min_inliers': a rigid motion needs at least 3");
   (void)parse_cpu_list(c.runtime.cpu_affinity);

@@ -1,5 +1,6 @@
 #include "rgbd_odometry/core/geometry.hpp"
 
+#include <Eigen/LU>
 #include <cmath>
 
 namespace rgbdo {
@@ -67,6 +68,13 @@ Matrix6d right_perturbation_covariance(const Eigen::Isometry3d& T, const Matrix6
   J.topLeftCorner<3, 3>() = T.linear().transpose();
   J.bottomRightCorner<3, 3>() = so3_right_jacobian(rotation_vector(T.linear()));
   return J * xi_covariance * J.transpose();
+}
+
+Matrix6d xi_covariance_from_right_perturbation(const Eigen::Isometry3d& T, const Matrix6d& perturbation_covariance) {
+  Matrix6d J = Matrix6d::Zero();
+  J.topLeftCorner<3, 3>() = T.linear();
+  J.bottomRightCorner<3, 3>() = so3_right_jacobian(rotation_vector(T.linear())).inverse();
+  return J * perturbation_covariance * J.transpose();
 }
 
 Vector6d right_perturbation_between(const Eigen::Isometry3d& reference, const Eigen::Isometry3d& estimate) {

@@ -12,7 +12,9 @@ FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
       border_px_(config.features.border_px),
       min_features_(config.ransac.min_inliers),
       detector_(config.features, runner),
-      backprojector_(config.camera, config.depth) {}
+      backprojector_(config.camera, config.depth) {
+  if (config.refinement.enabled) cloud_builder_.emplace(config.camera, config.depth, config.refinement);
+}
 
 void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.times = {frame.t_colour_ns, frame.t_depth_ns, frame.host_lead_ns};
@@ -20,6 +22,7 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.problem = frame.problem;  // empty for good frames: no allocation
   out.features.keypoints.clear();
   out.geometry.clear();
+  out.cloud.cols = out.cloud.rows = 0;  // keeps its buffers
   if (frame.status != Status::Ok) return;
   if (frame.gray.empty() || frame.depth_m.empty() || frame.gray.size() != frame.depth_m.size() ||
       frame.gray.type() != CV_8UC1 || frame.depth_m.type() != CV_32FC1) {
@@ -41,6 +44,10 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   detector_.detect(frame.gray, mask_, out.features);
   mark_cost_stage(CostStage::Geometry);
   backprojector_.compute(out.features.keypoints, frame.depth_m, out.geometry);
+  if (cloud_builder_) {
+    mark_cost_stage(CostStage::Refine);
+    cloud_builder_->build(frame.depth_m, out.cloud);
+  }
   if (static_cast<int>(out.features.keypoints.size()) < min_features_) out.status = Status::TooFewFeatures;
 }
 

@@ -93,6 +93,8 @@ PairEstimator::PairEstimator(const Config& config)
       matcher_(config.matching.ratio),
       ransac_(config.ransac, sensor_noise(config), config.features.max_features),
       covariance_(config.covariance, config.features.max_features),
+      aligner_(config.camera, config.refinement, config.covariance.depth_noise_coeff, config.depth.units_per_m),
+      alignment_trust_(config.refinement),
       latency_(latency_sigmas(config.covariance)) {
   // Sized once for the largest possible frame: the pair stage never allocates afterwards.
   const auto capacity = static_cast<size_t>(config.features.max_features);
@@ -175,6 +177,35 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
       inlier_cells_.push_back(static_cast<std::uint16_t>(std::min(row * cell_columns + column, 65535)));
     }
   }
+}
+
+int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s,
+                                     Matrix6d& covariance) {
+  if (prev.cloud.empty() || curr.cloud.empty() || !(dt_s > 0)) return 0;
+  // The depth maps were taken at the depth instants: their alignment measures the motion over
+  // the depth interval, carried to the colour interval at constant velocity. Two colour frames
+  // sharing one depth frame (or nearly) leave nothing to align.
+  const double dt_depth = static_cast<double>(curr.times.t_depth_ns - prev.times.t_depth_ns) * 1e-9;
+  if (!(dt_depth >= 0.5 * dt_s && dt_depth <= 2 * dt_s)) return 0;
+  const double to_depth = dt_depth / dt_s;
+  const Eigen::Isometry3d seed = transform_from_xi(xi_from_transform(fit_.T_prev_curr) * to_depth);
+  aligner_.align(prev.cloud, curr.cloud, seed, alignment_);
+  if (!alignment_.ok) return 0;
+  const Eigen::Isometry3d T_depth = transform_from_xi(xi_from_transform(alignment_.T_prev_curr) / to_depth);
+  const Matrix6d own_cov = alignment_.covariance / (to_depth * to_depth);
+  const Matrix6d feature_cov = right_perturbation_covariance(fit_.T_prev_curr, covariance);
+  const Matrix6d depth_cov = alignment_trust_.scaled(own_cov);
+  // Learnt from every fully constrained pair before the agreement test, which must not censor it.
+  if (alignment_.constrained == 6)
+    alignment_trust_.update(right_perturbation_between(fit_.T_prev_curr, T_depth), feature_cov, own_cov);
+  Eigen::Isometry3d fused;
+  Matrix6d fused_cov;
+  if (!fuse_estimates(fit_.T_prev_curr, feature_cov, T_depth, depth_cov, alignment_.basis, alignment_.constrained,
+                      fused, fused_cov))
+    return 0;
+  fit_.T_prev_curr = fused;
+  covariance = xi_covariance_from_right_perturbation(fused, fused_cov);
+  return alignment_.points;
 }
 
 PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFrame& curr) {
@@ -260,6 +291,13 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (!cov_ok) {
     r.times.covariance_ms = ms_since(t0);
     return fail(Status::CovarianceFailed);
+  }
+  if (config_.refinement.enabled && !paper_noise_) {
+    mark_cost_stage(CostStage::Refine);
+    r.depth_points = refine_with_depth(prev, curr, dt_s, cov);
+    r.depth_sigma_scale_t = alignment_trust_.translation_scale();
+    r.depth_sigma_scale_r = alignment_trust_.rotation_scale();
+    mark_cost_stage(CostStage::Covariance);
   }
   if (dt_s > 0) {
     const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};  // before the latency terms

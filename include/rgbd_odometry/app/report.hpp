@@ -14,9 +14,17 @@ namespace rgbdo {
 
 std::string pair_line(const PairResult& r, std::size_t index, bool verbose);
 
-// `total` sums the stage times of `timed_pairs` good pairs; `rematched_pairs` counts the pairs
-// whose windowed matching fell short (PairResult::rematched).
-void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const StageTimes& total,
-                   int timed_pairs, int rematched_pairs, const RealtimeStats& run);
+// What the summary tells of the pairs besides their accuracy.
+struct PairTallies {
+  StageTimes total;       // summed over the good pairs
+  int timed = 0;          // good pairs
+  int rematched = 0;      // windowed matching fell short (PairResult::rematched)
+  int depth_refined = 0;  // the depth alignment was fused in (PairResult::depth_points > 0)
+  double depth_sigma_scale_t = 0, depth_sigma_scale_r = 0;  // the last good pair's
+  void add(const PairResult& r);
+};
+
+void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const PairTallies& tallies,
+                   const RealtimeStats& run);
 
 }  // namespace rgbdo

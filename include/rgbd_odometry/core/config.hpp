@@ -69,6 +69,21 @@ struct RansacConfig {
   bool adaptive_stop = true;
 };
 
+// The depth alignment that refines the feature motion (pipeline/depth_alignment.hpp).
+struct RefinementConfig {
+  bool enabled = true;
+  int stride_px = 8;               // the depth maps sampled every this many pixels
+  int iterations = 4;              // Gauss-Newton steps at most
+  double max_distance_m = 0.05;    // a point further than this from its associated one is not used
+  int min_points = 300;            // fewer associations and the feature motion stands alone
+  double cell_px = 80;             // image cells whose residuals may be correlated (the covariance's clusters)
+  // The alignment's sigma is scaled by factors learnt against the features
+  // (depth_alignment.hpp, AlignmentTrust): their start, step per pair and ceiling (floor 1).
+  double sigma_scale_prior = 5;
+  double sigma_scale_rate = 0.05;
+  double sigma_scale_max = 1000;
+};
+
 inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "paper"};
 
 struct CovarianceConfig {
@@ -193,6 +208,7 @@ struct Config {
   MatchConfig matching;
   RansacConfig ransac;
   CovarianceConfig covariance;
+  RefinementConfig refinement;
   SensorConfig sensor;
   RuntimeConfig runtime;
   LogConfig log;

@@ -26,11 +26,12 @@ enum class CostStage : std::uint32_t {
   Pyramid,     // detection, our extractor: the image pyramid and its descriptor smoothing
   Corners,     // detection, our extractor: segment test, score, suppression, spread over cells
   Convert,     // colour to intensity, depth to metres: what a live frame needs too
+  Refine,      // the depth maps' coarse clouds and their alignment (pipeline/depth_alignment.hpp)
 };
-inline constexpr std::size_t kCostStageCount = 12;
+inline constexpr std::size_t kCostStageCount = 13;
 inline constexpr std::array<const char*, kCostStageCount> kCostStageNames{
     "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance", "pyramid", "corners",
-    "convert"};
+    "convert", "refine"};
 // The first extra argument of the marker call ("RGBD"): tells a marker from a real getpid.
 inline constexpr std::uint32_t kCostMarkerMagic = 0x52474244u;
 

@@ -42,6 +42,8 @@ Eigen::Matrix3d so3_right_jacobian(const Eigen::Vector3d& r);
 // A covariance of xi = (t, rotation vector) of T, expressed as a right perturbation of T
 // (rho = R^T dt, phi = J_r(r) dr).
 Matrix6d right_perturbation_covariance(const Eigen::Isometry3d& T, const Matrix6d& xi_covariance);
+// Its inverse: the covariance of xi from that of the right perturbation of T.
+Matrix6d xi_covariance_from_right_perturbation(const Eigen::Isometry3d& T, const Matrix6d& perturbation_covariance);
 
 // The right perturbation taking `reference` to `estimate`: (R_ref^T (t_est - t_ref), Log(R_ref^T R_est)).
 Vector6d right_perturbation_between(const Eigen::Isometry3d& reference, const Eigen::Isometry3d& estimate);

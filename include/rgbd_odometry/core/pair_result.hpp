@@ -29,6 +29,10 @@ struct PairResult {
   int point_pairs = 0;  // matches with usable depth in both frames
   int inliers = 0;
   double inlier_threshold_m = 0;
+  int depth_points = 0;  // depth points of the alignment fused with the features; 0: features alone
+  // The factors the depth alignment's sigma is scaled by on this sensor, translation and
+  // rotation, as learnt so far (pipeline/depth_alignment.hpp, AlignmentTrust); 0: no alignment.
+  double depth_sigma_scale_t = 0, depth_sigma_scale_r = 0;
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
   StageTimes times;

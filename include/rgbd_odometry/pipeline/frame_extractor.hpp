@@ -3,11 +3,13 @@
 // state (detector, mask and back-projection buffers) lives as long as the frame stream and
 // is touched by one thread; each frame's result is a ProcessedFrame that the per-pair half
 // (pair_estimator.hpp) reads twice, as the newer and then as the older frame of a pair.
+#include <optional>
 #include <string>
 
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/core/status.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
+#include "rgbd_odometry/pipeline/depth_alignment.hpp"
 #include "rgbd_odometry/pipeline/detect.hpp"
 #include "rgbd_odometry/pipeline/frame.hpp"
 
@@ -20,6 +22,7 @@ struct ProcessedFrame {
   std::string problem;  // the source's words for a failed frame (names the file, say)
   Features features;
   KeypointGeometry geometry;
+  DepthCloud cloud;  // empty when refinement.enabled is off
 };
 
 class FrameExtractor {
@@ -37,6 +40,7 @@ class FrameExtractor {
   int min_features_;  // fewer than a pose needs: the frame is flagged TooFewFeatures
   FeatureDetector detector_;
   KeypointBackProjector backprojector_;
+  std::optional<DepthCloudBuilder> cloud_builder_;
   cv::Mat mask_;
 };
 

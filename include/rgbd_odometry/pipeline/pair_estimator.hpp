@@ -12,6 +12,7 @@
 #include "rgbd_odometry/core/pair_result.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
+#include "rgbd_odometry/pipeline/depth_alignment.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/pipeline/latency_covariance.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
@@ -45,12 +46,20 @@ class PairEstimator {
   // inlier_cells_) for the covariance.
   void describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s);
 
+  // The depth maps' alignment, started at fit_'s motion, fused with it: fit_'s motion and
+  // `covariance` (of xi, the features') become the fused ones. The number of depth points
+  // used, 0 when the alignment failed or disagreed (then nothing changes).
+  int refine_with_depth(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s, Matrix6d& covariance);
+
   Config config_;
   bool paper_noise_;  // covariance.model "paper", decided once
   SensorNoise noise_;
   SymmetricMatcher matcher_;
   RigidRansac ransac_;
   PerturbationCovariance covariance_;
+  DepthAligner aligner_;
+  DepthAlignment alignment_;
+  AlignmentTrust alignment_trust_;
   std::vector<Match> matches_;
   std::vector<Eigen::Vector2d> predicted_;  // previous keypoints' positions in the current frame
   PointPairs pairs_;

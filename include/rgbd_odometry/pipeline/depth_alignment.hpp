@@ -1,0 +1,131 @@
+#pragma once
+// Stage 5b: the feature motion refined by the depth maps themselves.
+//
+// The features measure a motion from a few hundred points, each one pixel's depth at an
+// integer corner; the depth maps hold thousands of surface points the features throw away.
+// Here the current frame's depth, on a coarse grid (`refinement.stride_px`), is aligned to the
+// previous frame's surface by point-to-plane Gauss-Newton with projective association
+// (Chen & Medioni 1991; KinectFusion's data association), started at the feature motion.
+//
+// Its covariance comes from the alignment's own residuals, not from a sensor model: the
+// cluster-robust ("sandwich") covariance H^-1 (sum_c g_c g_c^T) H^-1 over image cells, g_c the
+// cell's gradient at the solution, which covers residuals correlated within a cell and noise of
+// any size, plus (6 / cells) s^2 H^-1 so that few cells cannot leave a direction without
+// variance. A direction the surfaces leave free (a plane's sliding) is left out altogether.
+// What the residuals cannot see (an error the whole depth map shares) is learnt against the
+// features (AlignmentTrust), and the two estimates are fused by information where they agree
+// (fuse_estimates): where the depth is exact (a rendered or a good stereo sensor) the
+// alignment dominates, where it is noisy (Kinect v1) the features keep most of the weight.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <opencv2/core/mat.hpp>
+#include <vector>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/geometry.hpp"
+
+namespace rgbdo {
+
+// One frame's depth on the coarse grid: points (camera frame, metres) and the surface normals
+// at them; z = 0 marks no point, a zero normal no normal (a hole or a depth edge nearby).
+struct DepthCloud {
+  int cols = 0, rows = 0;
+  std::vector<Eigen::Vector3f> point;
+  std::vector<Eigen::Vector3f> normal;
+  void clear();
+  bool empty() const { return cols == 0; }
+};
+
+class DepthCloudBuilder {
+ public:
+  DepthCloudBuilder(const CameraConfig& camera, const DepthConfig& depth, const RefinementConfig& refinement);
+  // Samples depth_m (CV_32FC1, metres, 0 = none) every stride_px pixels; allocates only the first time.
+  void build(const cv::Mat& depth_m, DepthCloud& out) const;
+
+ private:
+  int stride_, cols_, rows_;
+  DepthConfig depth_;
+  std::vector<Eigen::Vector2f> ray_;  // undistorted (x/z, y/z) of each grid pixel
+};
+
+struct DepthAlignment {
+  bool ok = false;
+  Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();
+  // The directions of motion the surfaces constrain (the first `constrained` columns, an
+  // orthonormal basis of the right perturbation), and the covariance within them. A plane
+  // leaves its sliding directions out: there the alignment knows nothing, however small its
+  // residuals.
+  Matrix6d basis = Matrix6d::Identity();
+  int constrained = 0;
+  Matrix6d covariance = Matrix6d::Zero();  // of the right perturbation of T_prev_curr, within the basis
+  int points = 0;                          // associations used in the last iteration
+};
+
+class DepthAligner {
+ public:
+  DepthAligner(const CameraConfig& camera, const RefinementConfig& refinement, double depth_noise_coeff,
+               double depth_units_per_m);
+  // Aligns curr's points to prev's surface, starting at `seed`.
+  void align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed, DepthAlignment& out);
+
+ private:
+  // Grid index in prev of a point in prev's camera frame; -1 outside.
+  int project(const Eigen::Vector3d& q, int cols, int rows) const;
+
+  CameraConfig camera_;
+  RefinementConfig config_;
+  double depth_noise_coeff_;
+  double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
+  struct Term {  // one association: residual along the normal, its weight and Jacobian
+    double r, w;
+    Vector6d J;
+    int cell;
+  };
+  std::vector<Term> terms_;
+  std::vector<double> scaled_;
+  std::vector<Vector6d> cell_gradient_;
+  std::vector<int> cell_count_;
+};
+
+// How far the depth alignment's own covariance may be trusted on this sensor, learnt online
+// from its disagreement with the features. The alignment's residuals cannot see an error a
+// depth map shares across the whole image (a structured-light sensor's distortion pattern, a
+// depth latency the stamps do not show): on TUM fr1's Kinect its errors are 5-20 times its own
+// sigma, on exact depth they are not. So its covariance is scaled by k_t^2 in translation and
+// k_r^2 in rotation, each factor nudged after every pair so that the difference d between the
+// two estimates has its expected size under C_features + K C_depth K (3 per 3-D block). An
+// exact sensor drives k to its floor of 1 and the alignment dominates; a noisy one is weighted
+// as it turns out to be. Starts at the prior, changes by at most the rate's share per pair.
+class AlignmentTrust {
+ public:
+  explicit AlignmentTrust(const RefinementConfig& config);
+  // C_depth scaled: K C K with K = diag(k_t, k_t, k_t, k_r, k_r, k_r).
+  Matrix6d scaled(const Matrix6d& depth_cov) const;
+  // One pair: d = depth (-) features (right perturbation), both covariances as fused.
+  void update(const Vector6d& d, const Matrix6d& feature_cov, const Matrix6d& depth_cov);
+  double translation_scale() const { return k_t_; }
+  double rotation_scale() const { return k_r_; }
+
+ private:
+  // The last kWindow pairs' differences and covariances: errors that do not cancel from one
+  // pair to the next show in their sum before they show in any one pair.
+  static constexpr int kWindow = 15;
+  struct Entry {
+    Vector6d d;
+    Matrix6d feature_cov, depth_cov;
+  };
+  std::array<Entry, kWindow> window_{};
+  int filled_ = 0, next_ = 0;
+  double k_t_, k_r_, rate_, max_;
+};
+
+// Fuses a full estimate `a` of one motion with an estimate `b` of its components along the
+// first k columns of `basis_b` (orthonormal), each with the covariance of its right
+// perturbation: the information-weighted mean about `a` and the fused covariance. False
+// (outputs untouched) when they disagree beyond the chi^2(k) 99.9 % gate.
+bool fuse_estimates(const Eigen::Isometry3d& a, const Matrix6d& cov_a, const Eigen::Isometry3d& b,
+                    const Matrix6d& cov_b, const Matrix6d& basis_b, int k, Eigen::Isometry3d& fused,
+                    Matrix6d& fused_cov);
+
+}  // namespace rgbdo

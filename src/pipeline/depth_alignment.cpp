@@ -1,0 +1,302 @@
+#include "rgbd_odometry/pipeline/depth_alignment.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+
+namespace rgbdo {
+namespace {
+
+// chi^2(k) at 99.9 %, k = 1..6: two estimates of one motion further apart than this disagree.
+constexpr std::array<double, 6> kAgreementGate{10.83, 13.82, 16.27, 18.47, 20.52, 22.46};
+// A direction with less than this share of the best-constrained one's information carries none.
+constexpr double kMinRelativeInformation = 1e-6;
+// Fewer image cells with associations than this and the cells' spread says too little of
+// the residuals' correlation: the alignment is not used.
+constexpr int kMinCells = 8;
+// The Gauss-Newton steps stop below these (m, rad).
+// Normals from the grid neighbours this many steps away: a longer baseline, less noise.
+constexpr int kNormalReach = 1;
+constexpr double kStepTranslationM = 1e-6, kStepRotationRad = 1e-6;
+
+}  // namespace
+
+void DepthCloud::clear() {
+  cols = rows = 0;
+  point.clear();
+  normal.clear();
+}
+
+DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConfig& depth,
+                                     const RefinementConfig& refinement)
+    : stride_(refinement.stride_px),
+      cols_(camera.width / refinement.stride_px),
+      rows_(camera.height / refinement.stride_px),
+      depth_(depth) {
+  // Each grid pixel's viewing ray, undistorted once.
+  std::vector<cv::Point2f> pixels, rays;
+  const int half = stride_ / 2;
+  for (int j = 0; j < rows_; ++j)
+    for (int i = 0; i < cols_; ++i) pixels.emplace_back(static_cast<float>(i * stride_ + half), static_cast<float>(j * stride_ + half));
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  const cv::Mat distortion(1, 5, CV_64F, const_cast<double*>(camera.distortion.data()));
+  if (!pixels.empty()) cv::undistortPoints(pixels, rays, K, distortion);
+  for (const cv::Point2f& r : rays) ray_.emplace_back(r.x, r.y);
+}
+
+void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
+  out.cols = cols_;
+  out.rows = rows_;
+  const auto n = static_cast<size_t>(cols_) * static_cast<size_t>(rows_);
+  out.point.resize(n);
+  out.normal.resize(n);
+  const int half = stride_ / 2;
+  const auto lo = static_cast<float>(depth_.min_m), hi = static_cast<float>(depth_.max_m);
+  for (int j = 0; j < rows_; ++j) {
+    const float* row = depth_m.ptr<float>(j * stride_ + half);
+    for (int i = 0; i < cols_; ++i) {
+      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(cols_) + static_cast<size_t>(i);
+      const float z = row[i * stride_ + half];
+      out.point[k] = (z >= lo && z <= hi) ? Eigen::Vector3f(ray_[k].x() * z, ray_[k].y() * z, z) : Eigen::Vector3f::Zero();
+    }
+  }
+  // Normals from the four grid neighbours; none where a neighbour is missing or the depth
+  // steps by more than an occlusion edge would (the keypoints' rule, over one grid step).
+  const float max_step = static_cast<float>(depth_.edge_max_relative_step * std::max(1, half) * kNormalReach);
+  for (int j = 0; j < rows_; ++j)
+    for (int i = 0; i < cols_; ++i) {
+      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(cols_) + static_cast<size_t>(i);
+      out.normal[k] = Eigen::Vector3f::Zero();
+      if (i < kNormalReach || j < kNormalReach || i >= cols_ - kNormalReach || j >= rows_ - kNormalReach) continue;
+      const Eigen::Vector3f& c = out.point[k];
+      const size_t dx = kNormalReach, dy = static_cast<size_t>(kNormalReach * cols_);
+      const Eigen::Vector3f& l = out.point[k - dx];
+      const Eigen::Vector3f& r = out.point[k + dx];
+      const Eigen::Vector3f& u = out.point[k - dy];
+      const Eigen::Vector3f& d = out.point[k + dy];
+      if (c.z() == 0 || l.z() == 0 || r.z() == 0 || u.z() == 0 || d.z() == 0) continue;
+      const float step = max_step * c.z();
+      if (std::abs(l.z() - c.z()) > step || std::abs(r.z() - c.z()) > step || std::abs(u.z() - c.z()) > step ||
+          std::abs(d.z() - c.z()) > step)
+        continue;
+      Eigen::Vector3f nrm = (r - l).cross(d - u);
+      const float len = nrm.norm();
+      if (!(len > 0)) continue;
+      nrm /= len;
+      if (nrm.dot(c) > 0) nrm = -nrm;  // towards the camera
+      out.normal[k] = nrm;
+    }
+}
+
+DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& refinement, double depth_noise_coeff,
+                           double depth_units_per_m)
+    : camera_(camera),
+      config_(refinement),
+      depth_noise_coeff_(depth_noise_coeff),
+      quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))) {}
+
+int DepthAligner::project(const Eigen::Vector3d& q, int cols, int rows) const {
+  if (!(q.z() > 0)) return -1;
+  const double x = q.x() / q.z(), y = q.y() / q.z();
+  const auto& k = camera_.distortion;  // k1 k2 p1 p2 k3
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]));
+  const double xd = x * radial + 2 * k[2] * x * y + k[3] * (r2 + 2 * x * x);
+  const double yd = y * radial + k[2] * (r2 + 2 * y * y) + 2 * k[3] * x * y;
+  const double s = config_.stride_px;
+  const double gi = std::floor((camera_.fx * xd + camera_.cx - s / 2) / s + 0.5);
+  const double gj = std::floor((camera_.fy * yd + camera_.cy - s / 2) / s + 0.5);
+  if (!(gi >= 0 && gj >= 0 && gi < cols && gj < rows)) return -1;
+  return static_cast<int>(gj) * cols + static_cast<int>(gi);
+}
+
+void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed,
+                         DepthAlignment& out) {
+  out = DepthAlignment{};
+  if (prev.empty() || curr.empty() || prev.cols != curr.cols || prev.rows != curr.rows) return;
+  const int cell_grid = std::max(1, static_cast<int>(std::lround(config_.cell_px / config_.stride_px)));
+  const int cells_x = (curr.cols + cell_grid - 1) / cell_grid, cells_y = (curr.rows + cell_grid - 1) / cell_grid;
+  cell_gradient_.resize(static_cast<size_t>(cells_x * cells_y));
+  cell_count_.resize(cell_gradient_.size());
+  const size_t capacity = curr.point.size();
+  if (terms_.capacity() < capacity) terms_.reserve(capacity), scaled_.reserve(capacity);
+
+  Eigen::Isometry3d T = seed;
+  Matrix6d H;
+  double s2 = 0;  // the last iteration's a-posteriori variance factor
+  int used = 0;
+  const double max_d2 = config_.max_distance_m * config_.max_distance_m;
+  for (int it = 0; it < config_.iterations; ++it) {
+    // The associations and their residuals at T.
+    terms_.clear();
+    const Eigen::Matrix3d R = T.linear();
+    for (int j = 0; j < curr.rows; ++j)
+      for (int i = 0; i < curr.cols; ++i) {
+        const Eigen::Vector3d p = curr.point[static_cast<size_t>(j * curr.cols + i)].cast<double>();
+        if (p.z() == 0) continue;
+        const Eigen::Vector3d q = T * p;
+        const int k = project(q, prev.cols, prev.rows);
+        if (k < 0) continue;
+        const Eigen::Vector3d n = prev.normal[static_cast<size_t>(k)].cast<double>();
+        if (n.z() == 0 && n.x() == 0 && n.y() == 0) continue;
+        const Eigen::Vector3d target = prev.point[static_cast<size_t>(k)].cast<double>();
+        const Eigen::Vector3d d = q - target;
+        if (d.squaredNorm() > max_d2) continue;
+        const double sz_c = depth_noise_coeff_ * p.z() * p.z(), sz_p = depth_noise_coeff_ * target.z() * target.z();
+        Term t;
+        t.w = 1.0 / (sz_c * sz_c + sz_p * sz_p + 2 * quantum_sigma_m_ * quantum_sigma_m_);
+        t.r = n.dot(d);
+        const Eigen::Vector3d m = R.transpose() * n;  // the normal in the current frame
+        t.J << m, p.cross(m);
+        t.cell = (j / cell_grid) * cells_x + i / cell_grid;
+        terms_.push_back(t);
+      }
+    if (static_cast<int>(terms_.size()) < config_.min_points) return;
+    // Tukey's biweight on the normalised residuals, its scale their median absolute deviation:
+    // associations across a crease or an occlusion edge weigh nothing, whatever the sensor's noise.
+    scaled_.clear();
+    for (const Term& t : terms_) scaled_.push_back(std::abs(t.r) * std::sqrt(t.w));
+    const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
+    std::nth_element(scaled_.begin(), mid, scaled_.end());
+    const double scale = 1.4826 * *mid;
+    const double cutoff = 4.685 * std::max(scale, 1e-12);
+
+    H.setZero();
+    Vector6d b = Vector6d::Zero();
+    std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
+    std::fill(cell_count_.begin(), cell_count_.end(), 0);
+    double sum_wr2 = 0, sum_weight = 0;
+    used = 0;
+    for (const Term& t : terms_) {
+      const double u = std::abs(t.r) * std::sqrt(t.w) / cutoff;
+      if (u >= 1) continue;
+      const double robust = (1 - u * u) * (1 - u * u);
+      const double w = robust * t.w;
+      H.selfadjointView<Eigen::Lower>().rankUpdate(t.J, w);
+      b += (w * t.r) * t.J;
+      sum_wr2 += w * t.r * t.r;
+      sum_weight += robust;
+      cell_gradient_[static_cast<size_t>(t.cell)] += (w * t.r) * t.J;
+      ++cell_count_[static_cast<size_t>(t.cell)];
+      ++used;
+    }
+    if (used < config_.min_points) return;
+    H = H.selfadjointView<Eigen::Lower>();
+    s2 = sum_wr2 / std::max(sum_weight - 6, 1.0);
+    const Eigen::LDLT<Matrix6d> ldlt(H);
+    if (ldlt.info() != Eigen::Success) return;
+    const Vector6d step = -ldlt.solve(b);
+    if (!step.allFinite()) return;
+    T = T * transform_from_xi(step);
+    if (step.head<3>().norm() < kStepTranslationM && step.tail<3>().norm() < kStepRotationRad) break;
+  }
+
+  // The covariance at the last linearisation: cells as clusters of correlated residuals.
+  Matrix6d spread = Matrix6d::Zero();
+  int cells = 0;
+  for (size_t c = 0; c < cell_gradient_.size(); ++c)
+    if (cell_count_[c] > 0) {
+      spread += cell_gradient_[c] * cell_gradient_[c].transpose();
+      ++cells;
+    }
+  if (cells < kMinCells) return;
+  // Eigen-decomposed: a direction the surfaces leave free (a plane's sliding, a corridor's
+  // length) carries no information, however small the residuals (exact depth).
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
+  if (eig.info() != Eigen::Success || !(eig.eigenvalues().maxCoeff() > 0)) return;
+  const double max_eigenvalue = eig.eigenvalues().maxCoeff();
+  int k = 0;
+  Matrix6d basis = Matrix6d::Zero();
+  Eigen::Matrix<double, 6, 1> inv = Eigen::Matrix<double, 6, 1>::Zero();
+  for (int e = 5; e >= 0; --e)  // largest first
+    if (eig.eigenvalues()(e) > kMinRelativeInformation * max_eigenvalue) {
+      basis.col(k) = eig.eigenvectors().col(e);
+      inv(k) = 1.0 / eig.eigenvalues()(e);
+      ++k;
+    }
+  const Matrix6d H_inv = basis * inv.asDiagonal() * basis.transpose();  // pseudo-inverse within the basis
+  // The clusters' spread (with the small-sample correction) and, so that few cells cannot leave
+  // a direction without variance, the independent-residual term weighted by 6 / cells.
+  const double c = cells;
+  out.covariance = H_inv * spread * H_inv * (c / (c - 1)) + H_inv * (s2 * 6.0 / c);
+  out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
+  out.basis = basis;
+  out.constrained = k;
+  out.T_prev_curr = T;
+  out.points = used;
+  out.ok = k > 0 && out.covariance.allFinite();
+}
+
+AlignmentTrust::AlignmentTrust(const RefinementConfig& config)
+    : k_t_(config.sigma_scale_prior),
+      k_r_(config.sigma_scale_prior),
+      rate_(config.sigma_scale_rate),
+      max_(config.sigma_scale_max) {}
+
+Matrix6d AlignmentTrust::scaled(const Matrix6d& depth_cov) const {
+  Vector6d k;
+  k << k_t_, k_t_, k_t_, k_r_, k_r_, k_r_;
+  return k.asDiagonal() * depth_cov * k.asDiagonal();
+}
+
+void AlignmentTrust::update(const Vector6d& d, const Matrix6d& feature_cov, const Matrix6d& depth_cov) {
+  if (!d.allFinite() || !feature_cov.allFinite() || !depth_cov.allFinite()) return;
+  window_[static_cast<size_t>(next_)] = {d, feature_cov, depth_cov};
+  next_ = (next_ + 1) % kWindow;
+  filled_ = std::min(filled_ + 1, kWindow);
+  Vector6d sum_d = Vector6d::Zero();
+  Matrix6d sum_f = Matrix6d::Zero(), sum_depth = Matrix6d::Zero();
+  for (int i = 0; i < filled_; ++i) {
+    sum_d += window_[static_cast<size_t>(i)].d;
+    sum_f += window_[static_cast<size_t>(i)].feature_cov;
+    sum_depth += window_[static_cast<size_t>(i)].depth_cov;
+  }
+  // The NEES of a difference in one 3-D block (0: translation, 3: rotation).
+  const auto nees3 = [&](const Vector6d& v, const Matrix6d& C, int at) {
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(C.block<3, 3>(at, at));
+    if (ldlt.info() != Eigen::Success) return 3.0;
+    return v.segment<3>(at).dot(ldlt.solve(v.segment<3>(at)));
+  };
+  const Matrix6d pair_expected = feature_cov + scaled(depth_cov);
+  const Matrix6d window_expected = sum_f + scaled(sum_depth);
+  // A multiplicative step towards E[NEES] = 3 per block, for the pair and for the window's
+  // sum, whichever is larger: bounded per pair, so one wild pair (a diverged alignment, a
+  // wrong feature fit) moves k by a few per cent at most.
+  const auto step = [&](double& k, int at) {
+    const double nees = std::max(nees3(d, pair_expected, at), filled_ == kWindow ? nees3(sum_d, window_expected, at) : 0.0);
+    const double factor = std::clamp(1.0 + rate_ * (nees / 3.0 - 1.0), 1.0 - rate_, 1.0 + 2 * rate_);
+    k = std::clamp(k * std::sqrt(factor), 1.0, max_);
+  };
+  step(k_t_, 0);
+  step(k_r_, 3);
+}
+
+bool fuse_estimates(const Eigen::Isometry3d& a, const Matrix6d& cov_a, const Eigen::Isometry3d& b,
+                    const Matrix6d& cov_b, const Matrix6d& basis_b, int k, Eigen::Isometry3d& fused,
+                    Matrix6d& fused_cov) {
+  if (k < 1 || k > 6) return false;
+  // Fixed-capacity matrices: the pair stage allocates nothing.
+  using Basis = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6>;
+  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+  using Column = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+  const Basis V = basis_b.leftCols(k);
+  // Within b's directions: its measurement z = V^T d of the difference d, noise V^T cov_b V.
+  const Column z = V.transpose() * right_perturbation_between(a, b);
+  const Square S = V.transpose() * (cov_a + cov_b) * V;
+  const Eigen::LDLT<Square> ldlt(S);
+  if (ldlt.info() != Eigen::Success) return false;
+  if (!(z.dot(ldlt.solve(z)) <= kAgreementGate[static_cast<size_t>(k - 1)])) return false;
+  // A Kalman update of a's perturbation by the measurement: gain K = cov_a V S^-1.
+  const Basis K = ldlt.solve(V.transpose() * cov_a).transpose();
+  const Vector6d x = K * z;
+  if (!x.allFinite()) return false;
+  fused = a * transform_from_xi(x);
+  fused_cov = cov_a - K * (V.transpose() * cov_a);
+  fused_cov = 0.5 * (fused_cov + fused_cov.transpose());
+  return fused_cov.allFinite();
+}
+
+}  // namespace rgbdo
