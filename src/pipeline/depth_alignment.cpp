@@ -20,7 +20,7 @@ constexpr int kMinCells = 8;
 // The Gauss-Newton steps stop below these (m, rad).
 // Normals from the grid neighbours this many steps away: a longer baseline, less noise.
 constexpr int kNormalReach = 1;
-constexpr double kStepTranslationM = 1e-6, kStepRotationRad = 1e-6;
+constexpr double kStepTranslationM = 1e-5, kStepRotationRad = 1e-5;
 
 }  // namespace
 
@@ -96,20 +96,30 @@ DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& r
     : camera_(camera),
       config_(refinement),
       depth_noise_coeff_(depth_noise_coeff),
-      quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))) {}
+      quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))),
+      distorted_(std::any_of(camera.distortion.begin(), camera.distortion.end(), [](double v) { return v != 0; })),
+      grid_fx_(static_cast<float>(camera.fx / refinement.stride_px)),
+      grid_fy_(static_cast<float>(camera.fy / refinement.stride_px)),
+      // + 0.5 so that truncation rounds to the nearest grid sample
+      grid_cx_(static_cast<float>((camera.cx - refinement.stride_px / 2) / refinement.stride_px + 0.5)),
+      grid_cy_(static_cast<float>((camera.cy - refinement.stride_px / 2) / refinement.stride_px + 0.5)) {
+  for (size_t i = 0; i < k_.size(); ++i) k_[i] = static_cast<float>(camera.distortion[i]);
+}
 
-int DepthAligner::project(const Eigen::Vector3d& q, int cols, int rows) const {
+int DepthAligner::project(const Eigen::Vector3f& q, int cols, int rows) const {
   if (!(q.z() > 0)) return -1;
-  const double x = q.x() / q.z(), y = q.y() / q.z();
-  const auto& k = camera_.distortion;  // k1 k2 p1 p2 k3
-  const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]));
-  const double xd = x * radial + 2 * k[2] * x * y + k[3] * (r2 + 2 * x * x);
-  const double yd = y * radial + k[2] * (r2 + 2 * y * y) + 2 * k[3] * x * y;
-  const double s = config_.stride_px;
-  const double gi = std::floor((camera_.fx * xd + camera_.cx - s / 2) / s + 0.5);
-  const double gj = std::floor((camera_.fy * yd + camera_.cy - s / 2) / s + 0.5);
-  if (!(gi >= 0 && gj >= 0 && gi < cols && gj < rows)) return -1;
+  const float iz = 1.0f / q.z();
+  float x = q.x() * iz, y = q.y() * iz;
+  if (distorted_) {
+    const float r2 = x * x + y * y;
+    const float radial = 1 + r2 * (k_[0] + r2 * (k_[1] + r2 * k_[4]));
+    const float xd = x * radial + 2 * k_[2] * x * y + k_[3] * (r2 + 2 * x * x);
+    y = y * radial + k_[2] * (r2 + 2 * y * y) + 2 * k_[3] * x * y;
+    x = xd;
+  }
+  // Grid column: the pixel over the stride, from the first sample's centre; rounded to nearest.
+  const float gi = x * grid_fx_ + grid_cx_, gj = y * grid_fy_ + grid_cy_;
+  if (!(gi >= 0 && gj >= 0 && gi < static_cast<float>(cols) && gj < static_cast<float>(rows))) return -1;
   return static_cast<int>(gj) * cols + static_cast<int>(gi);
 }
 
@@ -128,63 +138,78 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   Matrix6d H;
   double s2 = 0;  // the last iteration's a-posteriori variance factor
   int used = 0;
-  const double max_d2 = config_.max_distance_m * config_.max_distance_m;
+  const auto max_d2 = static_cast<float>(config_.max_distance_m * config_.max_distance_m);
+  const auto coeff = static_cast<float>(depth_noise_coeff_);
+  const auto floor2 = static_cast<float>(2 * quantum_sigma_m_ * quantum_sigma_m_);
   for (int it = 0; it < config_.iterations; ++it) {
-    // The associations and their residuals at T.
+    // The associations and their residuals at T, in single precision: a few thousand points,
+    // each to well below the depth's own resolution (the sums are kept in double).
     terms_.clear();
-    const Eigen::Matrix3d R = T.linear();
+    const Eigen::Matrix3f R = T.linear().cast<float>();
+    const Eigen::Vector3f t = T.translation().cast<float>();
     for (int j = 0; j < curr.rows; ++j)
       for (int i = 0; i < curr.cols; ++i) {
-        const Eigen::Vector3d p = curr.point[static_cast<size_t>(j * curr.cols + i)].cast<double>();
+        const Eigen::Vector3f& p = curr.point[static_cast<size_t>(j * curr.cols + i)];
         if (p.z() == 0) continue;
-        const Eigen::Vector3d q = T * p;
+        const Eigen::Vector3f q = R * p + t;
         const int k = project(q, prev.cols, prev.rows);
         if (k < 0) continue;
-        const Eigen::Vector3d n = prev.normal[static_cast<size_t>(k)].cast<double>();
+        const Eigen::Vector3f& n = prev.normal[static_cast<size_t>(k)];
         if (n.z() == 0 && n.x() == 0 && n.y() == 0) continue;
-        const Eigen::Vector3d target = prev.point[static_cast<size_t>(k)].cast<double>();
-        const Eigen::Vector3d d = q - target;
+        const Eigen::Vector3f& target = prev.point[static_cast<size_t>(k)];
+        const Eigen::Vector3f d = q - target;
         if (d.squaredNorm() > max_d2) continue;
-        const double sz_c = depth_noise_coeff_ * p.z() * p.z(), sz_p = depth_noise_coeff_ * target.z() * target.z();
-        Term t;
-        t.w = 1.0 / (sz_c * sz_c + sz_p * sz_p + 2 * quantum_sigma_m_ * quantum_sigma_m_);
-        t.r = n.dot(d);
-        const Eigen::Vector3d m = R.transpose() * n;  // the normal in the current frame
-        t.J << m, p.cross(m);
-        t.cell = (j / cell_grid) * cells_x + i / cell_grid;
-        terms_.push_back(t);
+        const float sz_c = coeff * p.z() * p.z(), sz_p = coeff * target.z() * target.z();
+        Term term;
+        term.w = 1.0f / (sz_c * sz_c + sz_p * sz_p + floor2);
+        term.r = n.dot(d);
+        const Eigen::Vector3f m = R.transpose() * n;  // the normal in the current frame
+        const Eigen::Vector3f pm = p.cross(m);
+        term.J = {m.x(), m.y(), m.z(), pm.x(), pm.y(), pm.z()};
+        term.cell = (j / cell_grid) * cells_x + i / cell_grid;
+        terms_.push_back(term);
       }
     if (static_cast<int>(terms_.size()) < config_.min_points) return;
-    // Tukey's biweight on the normalised residuals, its scale their median absolute deviation:
-    // associations across a crease or an occlusion edge weigh nothing, whatever the sensor's noise.
+    // Tukey's biweight on the normalised residuals, its scale their median absolute deviation
+    // (over every 4th association: plenty for a median): associations across a crease or an
+    // occlusion edge weigh nothing, whatever the sensor's noise.
     scaled_.clear();
-    for (const Term& t : terms_) scaled_.push_back(std::abs(t.r) * std::sqrt(t.w));
+    for (size_t k = 0; k < terms_.size(); k += 4) scaled_.push_back(terms_[k].r * terms_[k].r * terms_[k].w);
     const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
     std::nth_element(scaled_.begin(), mid, scaled_.end());
-    const double scale = 1.4826 * *mid;
-    const double cutoff = 4.685 * std::max(scale, 1e-12);
+    const double scale2 = 1.4826 * 1.4826 * static_cast<double>(*mid);
+    const double cutoff2 = 4.685 * 4.685 * std::max(scale2, 1e-24);
 
-    H.setZero();
+    std::array<double, 21> h{};  // the lower triangle of H, row by row
     Vector6d b = Vector6d::Zero();
     std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
     std::fill(cell_count_.begin(), cell_count_.end(), 0);
     double sum_wr2 = 0, sum_weight = 0;
     used = 0;
-    for (const Term& t : terms_) {
-      const double u = std::abs(t.r) * std::sqrt(t.w) / cutoff;
-      if (u >= 1) continue;
-      const double robust = (1 - u * u) * (1 - u * u);
-      const double w = robust * t.w;
-      H.selfadjointView<Eigen::Lower>().rankUpdate(t.J, w);
-      b += (w * t.r) * t.J;
-      sum_wr2 += w * t.r * t.r;
+    // No cutoff below the depth's quantisation: exact depth has residuals of rounding only,
+    // whose median says nothing of which associations are wrong.
+    const double floor_r2 = 4.685 * 4.685 * quantum_sigma_m_ * quantum_sigma_m_;
+    for (const Term& term : terms_) {
+      const double r2 = static_cast<double>(term.r) * term.r;
+      const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
+      if (u2 >= 1) continue;
+      const double robust = (1 - u2) * (1 - u2);
+      const double w = robust * term.w;
+      Vector6d J;
+      for (int e = 0; e < 6; ++e) J(e) = term.J[static_cast<size_t>(e)];
+      for (int row = 0, at = 0; row < 6; ++row)
+        for (int col = 0; col <= row; ++col, ++at) h[static_cast<size_t>(at)] += w * J(row) * J(col);
+      const double wr = w * term.r;
+      b += wr * J;
+      sum_wr2 += wr * term.r;
       sum_weight += robust;
-      cell_gradient_[static_cast<size_t>(t.cell)] += (w * t.r) * t.J;
-      ++cell_count_[static_cast<size_t>(t.cell)];
+      cell_gradient_[static_cast<size_t>(term.cell)] += wr * J;
+      ++cell_count_[static_cast<size_t>(term.cell)];
       ++used;
     }
     if (used < config_.min_points) return;
-    H = H.selfadjointView<Eigen::Lower>();
+    for (int row = 0, at = 0; row < 6; ++row)
+      for (int col = 0; col <= row; ++col, ++at) H(row, col) = H(col, row) = h[static_cast<size_t>(at)];
     s2 = sum_wr2 / std::max(sum_weight - 6, 1.0);
     const Eigen::LDLT<Matrix6d> ldlt(H);
     if (ldlt.info() != Eigen::Success) return;
@@ -220,8 +245,8 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   const Matrix6d H_inv = basis * inv.asDiagonal() * basis.transpose();  // pseudo-inverse within the basis
   // The clusters' spread (with the small-sample correction) and, so that few cells cannot leave
   // a direction without variance, the independent-residual term weighted by 6 / cells.
-  const double c = cells;
-  out.covariance = H_inv * spread * H_inv * (c / (c - 1)) + H_inv * (s2 * 6.0 / c);
+  const double n_cells = cells;
+  out.covariance = H_inv * spread * H_inv * (n_cells / (n_cells - 1)) + H_inv * (s2 * 6.0 / n_cells);
   out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
   out.basis = basis;
   out.constrained = k;

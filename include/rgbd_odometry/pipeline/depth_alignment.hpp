@@ -71,19 +71,22 @@ class DepthAligner {
 
  private:
   // Grid index in prev of a point in prev's camera frame; -1 outside.
-  int project(const Eigen::Vector3d& q, int cols, int rows) const;
+  int project(const Eigen::Vector3f& q, int cols, int rows) const;
 
   CameraConfig camera_;
   RefinementConfig config_;
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
+  bool distorted_;          // any lens distortion to apply when projecting
+  std::array<float, 5> k_{};
+  float grid_fx_, grid_fy_, grid_cx_, grid_cy_;  // the intrinsics on the grid
   struct Term {  // one association: residual along the normal, its weight and Jacobian
-    double r, w;
-    Vector6d J;
+    float r, w;
+    std::array<float, 6> J;
     int cell;
   };
   std::vector<Term> terms_;
-  std::vector<double> scaled_;
+  std::vector<float> scaled_;
   std::vector<Vector6d> cell_gradient_;
   std::vector<int> cell_count_;
 };
