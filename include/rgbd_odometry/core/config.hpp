@@ -73,7 +73,7 @@ struct RansacConfig {
 struct RefinementConfig {
   bool enabled = true;
   int stride_px = 8;               // the depth maps sampled every this many pixels
-  int iterations = 4;              // Gauss-Newton steps at most
+  int iterations = 3;              // Gauss-Newton steps at most
   double max_distance_m = 0.05;    // a point further than this from its associated one is not used
   int min_points = 300;            // fewer associations and the feature motion stands alone
   double cell_px = 80;             // image cells whose residuals may be correlated (the covariance's clusters)
