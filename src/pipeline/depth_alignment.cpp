@@ -36,14 +36,28 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
       cols_(camera.width / refinement.stride_px),
       rows_(camera.height / refinement.stride_px),
       depth_(depth) {
-  // Each grid pixel's viewing ray, undistorted once.
-  std::vector<cv::Point2f> pixels, rays;
+  // The grid is laid on the undistorted (pinhole) image, so that the alignment projects without
+  // the lens model: sample (i, j) is the ray through the pinhole pixel (i s + s/2, j s + s/2),
+  // read at the sensor pixel nearest to where the lens puts it, and its ray is that sensor
+  // pixel's own (undistorted back), so that the point is exact and only its grid place rounded.
   const int half = stride_ / 2;
+  std::vector<cv::Point3f> pinhole;
   for (int j = 0; j < rows_; ++j)
-    for (int i = 0; i < cols_; ++i) pixels.emplace_back(static_cast<float>(i * stride_ + half), static_cast<float>(j * stride_ + half));
+    for (int i = 0; i < cols_; ++i)
+      pinhole.emplace_back(static_cast<float>((i * stride_ + half - camera.cx) / camera.fx),
+                           static_cast<float>((j * stride_ + half - camera.cy) / camera.fy), 1.0f);
   const cv::Mat K = (cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
   const cv::Mat distortion(1, 5, CV_64F, const_cast<double*>(camera.distortion.data()));
-  if (!pixels.empty()) cv::undistortPoints(pixels, rays, K, distortion);
+  std::vector<cv::Point2f> sensor, rays;
+  cv::projectPoints(pinhole, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, distortion, sensor);
+  std::vector<cv::Point2f> nearest;
+  for (const cv::Point2f& p : sensor) {
+    const auto u = static_cast<int>(std::lround(p.x)), v = static_cast<int>(std::lround(p.y));
+    const bool inside = u >= 0 && v >= 0 && u < camera.width && v < camera.height;
+    pixel_.push_back(inside ? v * camera.width + u : -1);
+    nearest.emplace_back(static_cast<float>(inside ? u : 0), static_cast<float>(inside ? v : 0));
+  }
+  cv::undistortPoints(nearest, rays, K, distortion);
   for (const cv::Point2f& r : rays) ray_.emplace_back(r.x, r.y);
 }
 
@@ -55,13 +69,11 @@ void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
   out.normal.resize(n);
   const int half = stride_ / 2;
   const auto lo = static_cast<float>(depth_.min_m), hi = static_cast<float>(depth_.max_m);
-  for (int j = 0; j < rows_; ++j) {
-    const float* row = depth_m.ptr<float>(j * stride_ + half);
-    for (int i = 0; i < cols_; ++i) {
-      const size_t k = static_cast<size_t>(j) * static_cast<size_t>(cols_) + static_cast<size_t>(i);
-      const float z = row[i * stride_ + half];
-      out.point[k] = (z >= lo && z <= hi) ? Eigen::Vector3f(ray_[k].x() * z, ray_[k].y() * z, z) : Eigen::Vector3f::Zero();
-    }
+  CV_Assert(depth_m.isContinuous() && depth_m.cols * depth_m.rows > 0);
+  const auto* depth = depth_m.ptr<float>();
+  for (size_t k = 0; k < n; ++k) {
+    const float z = pixel_[k] >= 0 ? depth[pixel_[k]] : 0.0f;
+    out.point[k] = (z >= lo && z <= hi) ? Eigen::Vector3f(ray_[k].x() * z, ray_[k].y() * z, z) : Eigen::Vector3f::Zero();
   }
   // Normals from the four grid neighbours; none where a neighbour is missing or the depth
   // steps by more than an occlusion edge would (the keypoints' rule, over one grid step).
@@ -97,28 +109,19 @@ DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& r
       config_(refinement),
       depth_noise_coeff_(depth_noise_coeff),
       quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))),
-      distorted_(std::any_of(camera.distortion.begin(), camera.distortion.end(), [](double v) { return v != 0; })),
       grid_fx_(static_cast<float>(camera.fx / refinement.stride_px)),
       grid_fy_(static_cast<float>(camera.fy / refinement.stride_px)),
       // + 0.5 so that truncation rounds to the nearest grid sample
       grid_cx_(static_cast<float>((camera.cx - refinement.stride_px / 2) / refinement.stride_px + 0.5)),
       grid_cy_(static_cast<float>((camera.cy - refinement.stride_px / 2) / refinement.stride_px + 0.5)) {
-  for (size_t i = 0; i < k_.size(); ++i) k_[i] = static_cast<float>(camera.distortion[i]);
 }
 
 int DepthAligner::project(const Eigen::Vector3f& q, int cols, int rows) const {
   if (!(q.z() > 0)) return -1;
+  // The clouds' grids are pinhole (DepthCloudBuilder): no lens model here. Rounded to the
+  // nearest sample by truncating from + 0.5 (grid_cx_, grid_cy_).
   const float iz = 1.0f / q.z();
-  float x = q.x() * iz, y = q.y() * iz;
-  if (distorted_) {
-    const float r2 = x * x + y * y;
-    const float radial = 1 + r2 * (k_[0] + r2 * (k_[1] + r2 * k_[4]));
-    const float xd = x * radial + 2 * k_[2] * x * y + k_[3] * (r2 + 2 * x * x);
-    y = y * radial + k_[2] * (r2 + 2 * y * y) + 2 * k_[3] * x * y;
-    x = xd;
-  }
-  // Grid column: the pixel over the stride, from the first sample's centre; rounded to nearest.
-  const float gi = x * grid_fx_ + grid_cx_, gj = y * grid_fy_ + grid_cy_;
+  const float gi = q.x() * iz * grid_fx_ + grid_cx_, gj = q.y() * iz * grid_fy_ + grid_cy_;
   if (!(gi >= 0 && gj >= 0 && gi < static_cast<float>(cols) && gj < static_cast<float>(rows))) return -1;
   return static_cast<int>(gj) * cols + static_cast<int>(gi);
 }

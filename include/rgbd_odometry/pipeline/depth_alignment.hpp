@@ -40,13 +40,15 @@ struct DepthCloud {
 class DepthCloudBuilder {
  public:
   DepthCloudBuilder(const CameraConfig& camera, const DepthConfig& depth, const RefinementConfig& refinement);
-  // Samples depth_m (CV_32FC1, metres, 0 = none) every stride_px pixels; allocates only the first time.
+  // Samples depth_m (CV_32FC1, metres, 0 = none) on a grid every stride_px pixels of the
+  // undistorted image; allocates only the first time.
   void build(const cv::Mat& depth_m, DepthCloud& out) const;
 
  private:
   int stride_, cols_, rows_;
   DepthConfig depth_;
-  std::vector<Eigen::Vector2f> ray_;  // undistorted (x/z, y/z) of each grid pixel
+  std::vector<int> pixel_;            // the sensor pixel each grid sample reads (-1: outside the image)
+  std::vector<Eigen::Vector2f> ray_;  // that pixel's undistorted (x/z, y/z)
 };
 
 struct DepthAlignment {
@@ -77,8 +79,6 @@ class DepthAligner {
   RefinementConfig config_;
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
-  bool distorted_;          // any lens distortion to apply when projecting
-  std::array<float, 5> k_{};
   float grid_fx_, grid_fy_, grid_cx_, grid_cy_;  // the intrinsics on the grid
   struct Term {  // one association: residual along the normal, its weight and Jacobian
     float r, w;
