@@ -150,8 +150,11 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
     terms_.clear();
     const Eigen::Matrix3f R = T.linear().cast<float>();
     const Eigen::Vector3f t = T.translation().cast<float>();
+    // The first step, from the feature motion, takes every other point (a checkerboard): it
+    // only has to come near; the later ones, and the covariance, take them all.
+    const int step_i = it == 0 ? 2 : 1;
     for (int j = 0; j < curr.rows; ++j)
-      for (int i = 0; i < curr.cols; ++i) {
+      for (int i = it == 0 ? (j & 1) : 0; i < curr.cols; i += step_i) {
         const Eigen::Vector3f& p = curr.point[static_cast<size_t>(j * curr.cols + i)];
         if (p.z() == 0) continue;
         const Eigen::Vector3f q = R * p + t;
