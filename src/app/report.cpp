@@ -82,6 +82,7 @@ void PairTallies::add(const PairResult& r) {
     depth_refined += r.depth_points > 0 ? 1 : 0;
     depth_sigma_scale_t = r.depth_sigma_scale_t;
     depth_sigma_scale_r = r.depth_sigma_scale_r;
+    depth_lag_s = r.depth_lag_s;
   }
   rematched += r.rematched ? 1 : 0;
 }
@@ -119,7 +120,8 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   if (timed_pairs > 0 && tallies.depth_sigma_scale_t > 0)
     out << std::setprecision(1) << "  depth alignment: fused into " << tallies.depth_refined << " of " << timed_pairs
         << " good pairs; its own sigma scaled by " << tallies.depth_sigma_scale_t << " (translation) and "
-        << tallies.depth_sigma_scale_r << " (rotation) on this sensor, learnt against the features\n";
+        << tallies.depth_sigma_scale_r << " (rotation) and the depth " << tallies.depth_lag_s * 1e3
+        << " ms behind the colour on this sensor, learnt against the features\n";
   if (!with_groundtruth) {
     out << "  no groundtruth.txt: accuracy not evaluated\n";
     return;

@@ -77,6 +77,8 @@ std::vector<Param> param_table(Config& c) {
       {"refinement.sigma_scale_prior", "", "the depth alignment's sigma is scaled by factors learnt against the features; their start", &c.refinement.sigma_scale_prior, 1, 1e6},
       {"refinement.sigma_scale_rate", "", "how far one pair may move those factors (share per pair)", &c.refinement.sigma_scale_rate, 0, 0.5},
       {"refinement.sigma_scale_max", "", "the factors' ceiling: beyond it the sensor's depth adds nothing", &c.refinement.sigma_scale_max, 1, 1e9},
+      {"refinement.max_sigma_scale_fused", "", "the alignment is fused only while both learnt factors are at most this: beyond, its errors are ones its residuals cannot see", &c.refinement.max_sigma_scale_fused, 1, 1e9},
+      {"refinement.max_depth_lag_s", "s", "the depth's capture lag behind the colour, learnt from the depth alignment against the features and reported, at most this much", &c.refinement.max_depth_lag_s, 0, 1},
       {"sensor.fps", "Hz", "live sensor frame rate", &c.sensor.fps, 1, 120},
       {"sensor.registration", "", "hardware depth-to-colour registration", &c.sensor.registration},
       {"sensor.frame_timeout_ms", "ms", "no frame this long: the sensor is reported lost", &c.sensor.frame_timeout_ms, 100, 600000},

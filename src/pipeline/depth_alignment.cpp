@@ -18,6 +18,10 @@ constexpr double kMinRelativeInformation = 1e-6;
 // the residuals' correlation: the alignment is not used.
 constexpr int kMinCells = 8;
 // The Gauss-Newton steps stop below these (m, rad).
+// DepthLagEstimate: the prior (L = 0) weighs as much as this many squared rad/s of rate
+// change (a few pairs of a hand-held camera turning), and old pairs fade over this many.
+constexpr double kLagPriorWeight = 0.05;
+constexpr double kLagMemoryPairs = 300;
 // Normals from the grid neighbours this many steps away: a longer baseline, less noise.
 constexpr int kNormalReach = 1;
 constexpr double kStepTranslationM = 1e-5, kStepRotationRad = 1e-5;
@@ -150,11 +154,12 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
     terms_.clear();
     const Eigen::Matrix3f R = T.linear().cast<float>();
     const Eigen::Vector3f t = T.translation().cast<float>();
-    // The first step, from the feature motion, takes every other point (a checkerboard): it
-    // only has to come near; the later ones, and the covariance, take them all.
-    const int step_i = it == 0 ? 2 : 1;
+    // Every step but the last takes every other point (a checkerboard, alternating): they only
+    // have to come near; the last one, which the covariance is computed at, takes them all.
+    const bool last = it == config_.iterations - 1;
+    const int step_i = last ? 1 : 2;
     for (int j = 0; j < curr.rows; ++j)
-      for (int i = it == 0 ? (j & 1) : 0; i < curr.cols; i += step_i) {
+      for (int i = last ? 0 : ((j + it) & 1); i < curr.cols; i += step_i) {
         const Eigen::Vector3f& p = curr.point[static_cast<size_t>(j * curr.cols + i)];
         if (p.z() == 0) continue;
         const Eigen::Vector3f q = R * p + t;
@@ -273,7 +278,8 @@ Matrix6d AlignmentTrust::scaled(const Matrix6d& depth_cov) const {
   return k.asDiagonal() * depth_cov * k.asDiagonal();
 }
 
-void AlignmentTrust::update(const Vector6d& d, const Matrix6d& feature_cov, const Matrix6d& depth_cov) {
+void AlignmentTrust::update(const Vector6d& d, const Matrix6d& feature_cov, const Matrix6d& depth_cov,
+                            const Eigen::Matrix3d& lag_rotation_cov) {
   if (!d.allFinite() || !feature_cov.allFinite() || !depth_cov.allFinite()) return;
   window_[static_cast<size_t>(next_)] = {d, feature_cov, depth_cov};
   next_ = (next_ + 1) % kWindow;
@@ -291,8 +297,11 @@ void AlignmentTrust::update(const Vector6d& d, const Matrix6d& feature_cov, cons
     if (ldlt.info() != Eigen::Success) return 3.0;
     return v.segment<3>(at).dot(ldlt.solve(v.segment<3>(at)));
   };
-  const Matrix6d pair_expected = feature_cov + scaled(depth_cov);
-  const Matrix6d window_expected = sum_f + scaled(sum_depth);
+  Matrix6d pair_expected = feature_cov + scaled(depth_cov);
+  pair_expected.bottomRightCorner<3, 3>() += lag_rotation_cov;
+  // The lag's share telescopes over a window (the rate at its end less the rate at its start).
+  Matrix6d window_expected = sum_f + scaled(sum_depth);
+  window_expected.bottomRightCorner<3, 3>() += lag_rotation_cov;
   // A multiplicative step towards E[NEES] = 3 per block, for the pair and for the window's
   // sum, whichever is larger: bounded per pair, so one wild pair (a diverged alignment, a
   // wrong feature fit) moves k by a few per cent at most.
@@ -303,6 +312,32 @@ void AlignmentTrust::update(const Vector6d& d, const Matrix6d& feature_cov, cons
   };
   step(k_t_, 0);
   step(k_r_, 3);
+}
+
+DepthLagEstimate::DepthLagEstimate(const RefinementConfig& config)
+    : sum_rr_(kLagPriorWeight), max_s_(config.max_depth_lag_s) {}
+
+void DepthLagEstimate::update(const Eigen::Vector3d& d_rotation, const Eigen::Vector3d& delta_rate,
+                              double delta_rate_variance) {
+  if (!d_rotation.allFinite() || !delta_rate.allFinite() || !std::isfinite(delta_rate_variance)) return;
+  constexpr double keep = 1.0 - 1.0 / kLagMemoryPairs;
+  sum_dr_ = keep * sum_dr_ + d_rotation.dot(delta_rate);
+  // A rate change no larger than its own noise says nothing: it adds nothing to either sum.
+  const double signal = delta_rate.squaredNorm() - delta_rate_variance;
+  sum_rr_ = keep * sum_rr_ + std::max(signal, 0.0);
+  sum_rr_ = std::max(sum_rr_, kLagPriorWeight * keep);  // never below a few pairs' worth
+  lag_s_ = std::clamp(-sum_dr_ / sum_rr_, -max_s_, max_s_);
+  const double noise_per_axis = delta_rate_variance / 3.0;
+  moment_ = keep * moment_ + (1 - keep) * (delta_rate * delta_rate.transpose() -
+                                           noise_per_axis * Eigen::Matrix3d::Identity());
+}
+
+Eigen::Matrix3d DepthLagEstimate::rotation_covariance() const {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(moment_);
+  if (eig.info() != Eigen::Success) return Eigen::Matrix3d::Zero();
+  const Eigen::Matrix3d psd =
+      eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+  return lag_s_ * lag_s_ * psd;
 }
 
 bool fuse_estimates(const Eigen::Isometry3d& a, const Matrix6d& cov_a, const Eigen::Isometry3d& b,

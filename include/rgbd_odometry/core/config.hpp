@@ -73,15 +73,20 @@ struct RansacConfig {
 struct RefinementConfig {
   bool enabled = true;
   int stride_px = 8;               // the depth maps sampled every this many pixels
-  int iterations = 3;              // Gauss-Newton steps at most
+  int iterations = 4;              // Gauss-Newton steps at most
   double max_distance_m = 0.05;    // a point further than this from its associated one is not used
   int min_points = 300;            // fewer associations and the feature motion stands alone
   double cell_px = 80;             // image cells whose residuals may be correlated (the covariance's clusters)
   // The alignment's sigma is scaled by factors learnt against the features
   // (depth_alignment.hpp, AlignmentTrust): their start, step per pair and ceiling (floor 1).
-  double sigma_scale_prior = 5;
-  double sigma_scale_rate = 0.05;
+  double sigma_scale_prior = 4;
+  double sigma_scale_rate = 0.1;
   double sigma_scale_max = 1000;
+  // Fused only while both factors are at most this (pair_estimator.cpp says why).
+  double max_sigma_scale_fused = 2.5;
+  // The depth's lag behind the colour (beyond the stamps), learnt from the two estimates and
+  // reported (DepthLagEstimate), at most this much either way, seconds.
+  double max_depth_lag_s = 0.1;
 };
 
 inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "paper"};

@@ -33,6 +33,7 @@ struct PairResult {
   // The factors the depth alignment's sigma is scaled by on this sensor, translation and
   // rotation, as learnt so far (pipeline/depth_alignment.hpp, AlignmentTrust); 0: no alignment.
   double depth_sigma_scale_t = 0, depth_sigma_scale_r = 0;
+  double depth_lag_s = 0;  // the depth's capture lag behind the colour, as learnt so far
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
   StageTimes times;

@@ -106,7 +106,9 @@ class AlignmentTrust {
   // C_depth scaled: K C K with K = diag(k_t, k_t, k_t, k_r, k_r, k_r).
   Matrix6d scaled(const Matrix6d& depth_cov) const;
   // One pair: d = depth (-) features (right perturbation), both covariances as fused.
-  void update(const Vector6d& d, const Matrix6d& feature_cov, const Matrix6d& depth_cov);
+  // lag_rotation_cov: what the depth's lag adds to the alignment's rotation (DepthLagEstimate).
+  void update(const Vector6d& d, const Matrix6d& feature_cov, const Matrix6d& depth_cov,
+              const Eigen::Matrix3d& lag_rotation_cov);
   double translation_scale() const { return k_t_; }
   double rotation_scale() const { return k_r_; }
 
@@ -121,6 +123,35 @@ class AlignmentTrust {
   std::array<Entry, kWindow> window_{};
   int filled_ = 0, next_ = 0;
   double k_t_, k_r_, rate_, max_;
+};
+
+// The depth's capture lag behind the colour that the stamps do not show, learnt from the two
+// estimates. The features' rotation is the colour's (bearings); the depth alignment's motion
+// is the depth's, over an interval earlier by the lag L, so that to first order
+//     d_rot = depth (-) features = -L (w(t_curr) - w(t_prev)),
+// the change of angular rate between the pair's frames (the previous pair's rate to this
+// one's). L is the least-squares slope over the pairs seen (forgetting over about
+// kLagMemoryPairs), with the rate changes' own noise taken out of the denominator (errors in
+// the regressor would shrink L towards 0), started at 0 with the weight of a few pairs and
+// bounded by refinement.max_depth_lag_s. On TUM fr1's Kinect it comes to 20-40 ms (the motion
+// capture says 25-28 ms); on a synchronised sensor it stays near 0. The lag is not corrected
+// pair by pair (the rate change it would multiply is the features' own, as noisy as the
+// correction is large); the alignment's rotation is weighted by what it may do instead.
+class DepthLagEstimate {
+ public:
+  explicit DepthLagEstimate(const RefinementConfig& config);
+  double lag_s() const { return lag_s_; }
+  // What the lag does to the alignment's rotation, as a covariance: L^2 times the typical
+  // change of angular rate between frames (its running second moment, less its noise).
+  Eigen::Matrix3d rotation_covariance() const;
+  // d_rotation: rotation part of depth (-) features; delta_rate: the change of angular rate
+  // (rad/s); its noise variance summed over the axes.
+  void update(const Eigen::Vector3d& d_rotation, const Eigen::Vector3d& delta_rate, double delta_rate_variance);
+
+ private:
+  double sum_dr_ = 0, sum_rr_ = 0;  // sum of d . delta and of |delta|^2 - noise, forgetting
+  Eigen::Matrix3d moment_ = Eigen::Matrix3d::Zero();  // running mean of delta delta^T - noise
+  double lag_s_ = 0, max_s_;
 };
 
 // Fuses a full estimate `a` of one motion with an estimate `b` of its components along the

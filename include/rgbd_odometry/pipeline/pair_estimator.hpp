@@ -60,6 +60,7 @@ class PairEstimator {
   DepthAligner aligner_;
   DepthAlignment alignment_;
   AlignmentTrust alignment_trust_;
+  DepthLagEstimate depth_lag_;
   std::vector<Match> matches_;
   std::vector<Eigen::Vector2d> predicted_;  // previous keypoints' positions in the current frame
   PointPairs pairs_;
