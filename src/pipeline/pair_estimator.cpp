@@ -214,7 +214,7 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   // A sensor whose alignment errs by several times what its residuals say has errors they
   // cannot see (a structured-light depth map's distortion, its lag): they do not average out
   // from pair to pair, and fusing them costs more over a second than it gains per pair (TUM
-  // fr1's Kinect: factors 5-7; fused, pair error 4.69 -> 3.44 mm but 1-s drift 0.022 -> 0.027
+  // fr1's Kinect: factors 3-7; fused, pair error 4.69 -> 3.55 mm but 1-s drift 0.022 -> 0.027
   // m/s). The features then stand alone; the factors go on being learnt.
   if (std::max(alignment_trust_.translation_scale(), alignment_trust_.rotation_scale()) >
       config_.refinement.max_sigma_scale_fused)
