@@ -6,7 +6,7 @@
 //   features       OpenCV's ORB (1000 features, 8 levels x 1.2, FAST 20)
 //   matching       cv::BFMatcher(NORM_HAMMING).knnMatch(k = 2) both ways, ratio test, mutual
 //   3-D points     cv::undistortPoints, depth at the keypoint
-//   RANSAC         the project's first, straightforward RANSAC (test/straightforward_ransac.hpp)
+//   RANSAC         the project's first, straightforward RANSAC (straightforward_ransac.hpp)
 //   covariance     std::normal_distribution noise and Eigen::umeyama per perturbation
 #include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
@@ -15,7 +15,7 @@
 #include <random>
 #include <vector>
 
-#include "../test/straightforward_ransac.hpp"
+#include "straightforward_ransac.hpp"
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/core/noise_model.hpp"

@@ -34,9 +34,17 @@ expect_file usr/lib/sysusers.d/rgbd-odometry.conf 644
 expect_file usr/share/rgbd-odometry/config/tum-fr1.yaml 644
 expect_file usr/share/doc/rgbd-odometry/README.md 644
 expect_file usr/share/doc/rgbd-odometry/DEPLOY.md 644
-driver=$(find "$root/usr/lib" -path '*/OpenNI2/Drivers/libRgbdoVirtualSensor.so.0' | head -n 1)
-[ -n "$driver" ] || fail "the virtual sensor driver is not in an OpenNI2/Drivers directory"
+# The virtual sensor is a test tool: its own package, not the vehicle's.
+[ -z "$(find "$root" -name 'libRgbdoVirtualSensor*')" ] || fail "the vehicle's package carries the virtual sensor"
 dpkg-deb -f "$deb" Depends | grep -q libopenni2-0 || fail "Depends lacks the OpenNI2 runtime"
+vdeb=$(ls "$work"/out/rgbd-odometry-virtual-sensor_*_"$arch".deb 2>/dev/null | head -n 1)
+[ -n "$vdeb" ] || fail "no rgbd-odometry-virtual-sensor_*_$arch.deb produced"
+vroot=$work/vroot
+dpkg-deb -x "$vdeb" "$vroot"
+driver=$(find "$vroot/usr/lib" -path '*/OpenNI2/Drivers/libRgbdoVirtualSensor.so.0' | head -n 1)
+[ -n "$driver" ] || fail "the virtual sensor driver is not in an OpenNI2/Drivers directory of its package"
+dpkg-deb -f "$vdeb" Depends | grep -q libopenni2-0 || fail "the virtual sensor's Depends lacks the OpenNI2 runtime"
+[ -z "$(find "$vroot" -name rgbd-odometry -type f)" ] || fail "the virtual sensor's package carries the program"
 for s in postinst prerm postrm; do expect_file "DEBIAN/$s" 755; done
 grep -qx /etc/rgbd-odometry/rgbd-odometry.yaml "$root/DEBIAN/conffiles" || fail "config is not a conffile"
 grep -qx /etc/default/rgbd-odometry "$root/DEBIAN/conffiles" || fail "/etc/default file is not a conffile"
@@ -73,4 +81,4 @@ run=("$root/usr/bin/rgbd-odometry")
 out=$("${run[@]}" --source "tum:$data" --config "$root/usr/share/rgbd-odometry/config/tum-fr1.yaml" -q) ||
   fail "packaged binary exited non-zero"
 echo "$out" | grep -q "39 pairs, 39 ok, 0 failed" || fail "packaged binary replay: $out"
-echo "package $arch: $(basename "$deb") passes"
+echo "package $arch: $(basename "$deb") and $(basename "$vdeb") pass"

@@ -6,6 +6,7 @@
 
 #include "rgbd_odometry/simd/kernels.hpp"
 #include "perturb_reference.hpp"
+#include "runnable_kernel_sets.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/core/noise_model.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
@@ -320,8 +321,8 @@ TEST(PerturbationKernels, EverySetMatchesTheScalarReference) {
   KernelInput input(s, d, false);
   Sums reference;
   simd::perturbation_sums_scalar(input.in, reference.view());
-  for (const auto& set : simd::compiled_kernel_sets()) {
-    if (!simd::cpu_supports(set)) continue;
+  for (const auto* set_ptr : twins_of_reference(&simd::KernelSet::perturbation_sums)) {
+    const simd::KernelSet& set = *set_ptr;
     Sums got;
     set.perturbation_sums(input.in, got.view());
     float worst = 0;

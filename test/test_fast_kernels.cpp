@@ -22,7 +22,7 @@ void expect_same_as_scalar(const cv::Mat& image, int start, int n, int threshold
     const std::uint8_t* row = image.ptr<std::uint8_t>(y) + start;
     simd::fast9_row_scalar(row, static_cast<std::ptrdiff_t>(image.step), n, threshold, expected.data());
     ASSERT_EQ(expected[static_cast<size_t>(n)], 0xAA) << "the reference wrote past n";
-    for (const auto* set : runnable_sets()) {
+    for (const auto* set : twins_of_reference(&simd::KernelSet::fast9_row)) {
       std::fill(got.begin(), got.end(), 0xAA);
       set->fast9_row(row, static_cast<std::ptrdiff_t>(image.step), n, threshold, got.data());
       ASSERT_EQ(got, expected) << set->name << ", " << what << ", row " << y << ", start " << start << ", n " << n
@@ -56,7 +56,7 @@ TEST(FastKernels, BitExactOnRealFrames) {
 TEST(FastKernels, FindTheCornerOfABrightSquare) {
   cv::Mat image(20, 40, CV_8UC1, cv::Scalar(10));
   cv::rectangle(image, cv::Rect(20, 10, 20, 10), cv::Scalar(200), cv::FILLED);
-  for (const auto* set : runnable_sets()) {
+  for (const auto* set : sets_with_own(&simd::KernelSet::fast9_row)) {
     std::vector<std::uint8_t> flags(34);
     // Row 10 from column 3: the square's top-left corner is at x = 20, i.e. flags[17].
     set->fast9_row(image.ptr<std::uint8_t>(10) + 3, static_cast<std::ptrdiff_t>(image.step), 34, 20, flags.data());

@@ -65,7 +65,7 @@ TEST(HammingKernels, ThisCpuRunsAtLeastOneSimdSet) {
 
 TEST(HammingKernels, BitExactAtLaneBoundariesAndEdgeSizes) {
   const int sizes[] = {0, 1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 31, 32, 33, 63, 64, 65, 100};
-  for (const auto* set : runnable_sets())
+  for (const auto* set : twins_of_reference(&simd::KernelSet::nearest_two_hamming))
     for (int bytes : {32, 64, 8, 24, 61}) {  // 61: AKAZE's size, handled by the reference path
       for (int nq : sizes)
         for (int nt : {0, 1, 3, 4, 5, 7, 8, 9, 17, 33}) {
@@ -79,7 +79,7 @@ TEST(HammingKernels, BitExactAtLaneBoundariesAndEdgeSizes) {
 }
 
 TEST(HammingKernels, BitExactOnUnalignedRowsOddStridesAndTies) {
-  for (const auto* set : runnable_sets())
+  for (const auto* set : twins_of_reference(&simd::KernelSet::nearest_two_hamming))
     for (int offset : {1, 3, 7})
       for (int alphabet : {0, 2, 3}) {
         const std::size_t stride = 32 + static_cast<std::size_t>(offset);  // rows not multiples of 8 apart
@@ -94,7 +94,7 @@ TEST(HammingKernels, RowsKernelBitExactForAnyRowListSizeAndLayout) {
   // Row lists of every length around the kernel's pairs, in any order, with repeats; sizes
   // the NEON path takes (32 bytes) and the ones it hands to the reference.
   std::mt19937 rng(11);
-  for (const auto* set : runnable_sets())
+  for (const auto* set : sets_with_own(&simd::KernelSet::hamming_rows))
     for (int bytes : {32, 64, 61})
       for (int offset : {0, 3}) {
         const std::size_t stride = static_cast<std::size_t>(bytes + offset);
@@ -130,7 +130,7 @@ TEST(HammingKernels, BitExactOnRealOrbDescriptors) {
   const cv::Mat& tb = b.features.descriptors;
   ASSERT_GT(qa.rows, 500);
   ASSERT_EQ(qa.cols, 32);
-  for (const auto* set : runnable_sets())
+  for (const auto* set : twins_of_reference(&simd::KernelSet::nearest_two_hamming))
     expect_same_as_scalar(*set, qa.data, qa.rows, qa.step, tb.data, tb.rows, tb.step, 32, "ORB frames 0 and 9");
 }
 

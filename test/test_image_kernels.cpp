@@ -30,7 +30,7 @@ constexpr int kRunLengths[] = {0, 1, 7, 8, 9, 15, 16, 17, 31, 33, 100, 533};
 
 TEST(ImageKernels, BlendRowsIsTheRoundedWeightedMeanInEverySet) {
   const auto r0 = random_bytes(600, 1), r1 = random_bytes(600, 2);
-  for (const auto* set : runnable_sets())
+  for (const auto* set : sets_with_own(&simd::KernelSet::blend_rows))
     for (unsigned w : {0u, 1u, 77u, 128u, 255u, 256u})
       for (int n : kRunLengths) {
         std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
@@ -69,7 +69,7 @@ TEST(ImageKernels, ResampleRowGathersAndBlendsAsTheReference) {
       const int w = g.weight[i % 8];
       ASSERT_EQ(want[static_cast<size_t>(i)], (a * (256 - w) + b * w + 128) >> 8);
     }
-    for (const auto* set : runnable_sets()) {
+    for (const auto* set : sets_with_own(&simd::KernelSet::resample_row)) {
       std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
       set->resample_row(src.data(), groups.data(), n, got.data());
       EXPECT_EQ(got, want) << set->name << " n " << n;
@@ -95,7 +95,7 @@ TEST(ImageKernels, Box5RowSumsTheFiveByFiveNeighbourhood) {
         const int sum = integral.at<int>(7, x + 3) - integral.at<int>(2, x + 3) - integral.at<int>(7, x - 2) + integral.at<int>(2, x - 2);
         ASSERT_EQ(want[static_cast<size_t>(i)], sum) << "start " << start << " i " << i;
       }
-      for (const auto* set : runnable_sets()) {
+      for (const auto* set : sets_with_own(&simd::KernelSet::box5_row)) {
         std::vector<std::uint16_t> got(static_cast<size_t>(n) + 1, 0xABCD);
         set->box5_row(centre, static_cast<std::ptrdiff_t>(image.step), n, got.data());
         EXPECT_EQ(got, want) << set->name << " start " << start << " n " << n;
@@ -129,7 +129,7 @@ TEST(ImageKernels, DepthInRangeFollowsInRangeOnEveryFloat) {
           ASSERT_EQ(mask.at<std::uint8_t>(0, i), want[static_cast<size_t>(i)]) << depth[static_cast<size_t>(i)];
         }
       }
-      for (const auto* set : runnable_sets()) {
+      for (const auto* set : sets_with_own(&simd::KernelSet::depth_in_range_row)) {
         std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
         set->depth_in_range_row(depth.data(), n, lo, hi, got.data());
         EXPECT_EQ(got, want) << set->name << " lo " << lo << " n " << n;
@@ -154,7 +154,7 @@ TEST(ImageKernels, DiscMomentsAreTheIntensityCentroidSums) {
           want10 += dx * image.at<std::uint8_t>(cy + dy, cx + dx);
           want01 += dy * image.at<std::uint8_t>(cy + dy, cx + dx);
         }
-    for (const auto* set : runnable_sets()) {
+    for (const auto* set : sets_with_own(&simd::KernelSet::disc_moments)) {
       std::int32_t m10 = 7, m01 = 7;
       set->disc_moments(centre, static_cast<std::ptrdiff_t>(image.step), &m10, &m01);
       EXPECT_EQ(m10, want10) << set->name << " at " << cx << "," << cy;
@@ -165,7 +165,7 @@ TEST(ImageKernels, DiscMomentsAreTheIntensityCentroidSums) {
   cv::Mat ramp(40, 40, CV_8UC1);
   for (int y = 0; y < 40; ++y)
     for (int x = 0; x < 40; ++x) ramp.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(5 * x);
-  for (const auto* set : runnable_sets()) {
+  for (const auto* set : sets_with_own(&simd::KernelSet::disc_moments)) {
     std::int32_t m10 = 0, m01 = 7;
     set->disc_moments(ramp.ptr<std::uint8_t>(20) + 20, static_cast<std::ptrdiff_t>(ramp.step), &m10, &m01);
     EXPECT_GT(m10, 0) << set->name;
@@ -186,7 +186,7 @@ TEST(ImageKernels, ColourToGrayIsOpenCvsConversion) {
     for (const bool red_first : {false, true}) {
       cv::Mat want;
       cv::cvtColor(*image, want, red_first ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
-      for (const auto* set : runnable_sets())
+      for (const auto* set : sets_with_own(&simd::KernelSet::colour_to_gray_row))
         for (int n : {0, 1, 7, 8, 9, 17, image->cols}) {
           std::vector<std::uint8_t> got(static_cast<size_t>(n) + 1, 0xAB);
           for (int y = 0; y < image->rows; ++y) {
@@ -207,7 +207,7 @@ TEST(ImageKernels, DepthToMetresIsConvertTosProduct) {
   for (const double units_per_m : {5000.0, 1000.0, 1e6, 1e-3, 3.7}) {
     cv::Mat want;
     raw.convertTo(want, CV_32F, 1.0 / units_per_m);
-    for (const auto* set : runnable_sets())
+    for (const auto* set : sets_with_own(&simd::KernelSet::depth_to_metres_row))
       for (int n : {0, 1, 7, 8, 9, 203}) {
         std::vector<float> got(static_cast<size_t>(n) + 1, -1.0f);
         for (int y = 0; y < raw.rows; ++y) {

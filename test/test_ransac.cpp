@@ -137,80 +137,108 @@ TEST(Ransac, FewerPairsThanMinimumFails) {
 }  // namespace rgbdo
 
 // ---------------------------------------------------------------------------------------
-// The allocation-free RANSAC against the first, straightforward version, same seeds.
+// RigidRansac against an oracle of what it promises (test/ransac_oracle.hpp): the
+// refinement's fixed point and the final fit's optimality, checked with code of its own.
 
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/io/config_file.hpp"
-#include "straightforward_ransac.hpp"
+#include "ransac_oracle.hpp"
+#include "runnable_kernel_sets.hpp"
 
 namespace rgbdo {
 namespace {
 
-struct Agreement {
-  int cases = 0, same_inliers = 0;
-  double worst_translation = 0, worst_rotation = 0;
-  void add(const RansacResult& a, const StraightforwardResult& b) {
+struct OracleVerdicts {
+  int cases = 0, fixed_points = 0, minima = 0, refused = 0;
+  double worst_threshold_difference = 0;
+  void check(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, const RansacResult& r,
+             const RansacConfig& config, const SensorNoise& noise) {
+    if (r.status != Status::Ok) return;
     ++cases;
-    EXPECT_EQ(a.status, b.status);
-    same_inliers += a.inliers == b.inliers;
-    const Eigen::Isometry3d d = a.T_prev_curr.inverse() * b.T_prev_curr;
-    worst_translation = std::max(worst_translation, d.translation().norm());
-    worst_rotation = std::max(worst_rotation, rotation_angle(d.linear()));
+    const oracle::FixedPoint f =
+        oracle::refinement_fixed_point(prev, curr, r.inliers, config.inlier_threshold_m, noise.depth_noise_coeff);
+    fixed_points += f.inliers == r.inliers;
+    worst_threshold_difference = std::max(worst_threshold_difference, std::abs(f.threshold_m - r.threshold_m));
+    const Eigen::Isometry3d d = f.least_squares.inverse() * r.T_prev_curr;
+    if (d.translation().norm() < 1e-9 && rotation_angle(d.linear()) < 1e-9) {
+      ++refused;  // the anisotropic fit's jump was refused: the least-squares motion stands
+      return;
+    }
+    minima += oracle::is_local_minimum(prev, curr, r.inliers, noise, r.T_prev_curr, 1e-5, 1e-12);
   }
 };
 
-TEST(RansacAgainstFirstVersion, SameAnswersOnRealFramesForTheSameSeed) {
+TEST(RansacOracle, RealFramesEndAtTheRefinementsFixedPointAndTheFitsMinimum) {
   // GIVEN the 3-D correspondences of the bundled frame pairs (real ORB matches)
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
   FrameExtractor extractor(config);
   const SensorNoise noise = sensor_noise(config);
-  RigidRansac fast(config.ransac, noise, config.features.max_features);
-  StraightforwardRansac first(config.ransac, noise);
+  RigidRansac ransac(config.ransac, noise, config.features.max_features);
   SymmetricMatcher matcher(config.matching.ratio);
   ProcessedFrame prev, curr;
   extractor.extract(load_tum_frame(seq.frames[0], 5000, 640, 480), prev);
-  Agreement agreement;
+  OracleVerdicts verdicts;
   for (size_t i = 1; i < seq.frames.size(); ++i) {
     extractor.extract(load_tum_frame(seq.frames[i], 5000, 640, 480), curr);
     std::vector<Match> matches;
     matcher.match(prev.features.descriptors, curr.features.descriptors, matches);
     PointPairs pairs;
     build_point_pairs(matches, prev.geometry, prev.times, curr.geometry, curr.times, nullptr, pairs);
-    // WHEN both run from the same seed
+    // WHEN RANSAC runs from three seeds
     for (std::uint64_t seed : {1u, 2u, 3u}) {
-      Rng ra(seed), rb(seed);
-      RansacResult a;
-      fast.estimate(pairs.prev, pairs.curr, ra, a);
-      agreement.add(a, first.estimate(pairs.prev, pairs.curr, rb));
+      Rng rng(seed);
+      RansacResult r;
+      ransac.estimate(pairs.prev, pairs.curr, rng, r);
+      verdicts.check(pairs.prev, pairs.curr, r, config.ransac, noise);
     }
     std::swap(prev, curr);
   }
-  // THEN they keep the same inliers and the same motion. The hypotheses differ in the last
-  // bits (closed-form triplet fit, float scoring), the refinement converges to one answer.
-  EXPECT_EQ(agreement.same_inliers, agreement.cases);
-  EXPECT_LT(agreement.worst_translation, 1e-9);
-  EXPECT_LT(agreement.worst_rotation, 1e-9);
+  // THEN every answer is the refinement's fixed point, and the final motion minimises the
+  // Mahalanobis cost (or is the least-squares one where that fit was refused)
+  EXPECT_EQ(verdicts.cases, 3 * 39);
+  EXPECT_EQ(verdicts.fixed_points, verdicts.cases);
+  EXPECT_LT(verdicts.worst_threshold_difference, 1e-9);
+  EXPECT_EQ(verdicts.minima + verdicts.refused, verdicts.cases);
+  EXPECT_LE(verdicts.refused, verdicts.cases / 20) << "the anisotropic fit refused too often";
 }
 
-TEST(RansacAgainstFirstVersion, SameAnswersOnSyntheticScenes) {
-  Agreement agreement;
+TEST(RansacOracle, SyntheticScenesEndAtTheRefinementsFixedPointAndTheFitsMinimum) {
+  OracleVerdicts verdicts;
   for (unsigned scene_seed = 0; scene_seed < 30; ++scene_seed) {
     Vector6d xi;
     xi << 0.01 * (scene_seed % 5), -0.02, 0.01, 0.01, -0.005 * (scene_seed % 3), 0.01;
     const Scene s = make_scene(transform_from_xi(xi), 300, 0.1 + 0.015 * scene_seed, 0.003, scene_seed);
-    RigidRansac fast(paper_config(), SensorNoise{}, 300);
-    StraightforwardRansac first(paper_config(), SensorNoise{});
-    Rng ra(scene_seed), rb(scene_seed);
-    RansacResult a;
-    fast.estimate(s.prev, s.curr, ra, a);
-    agreement.add(a, first.estimate(s.prev, s.curr, rb));
+    RigidRansac ransac(paper_config(), SensorNoise{}, 300);
+    Rng rng(scene_seed);
+    RansacResult r;
+    ransac.estimate(s.prev, s.curr, rng, r);
+    verdicts.check(s.prev, s.curr, r, paper_config(), SensorNoise{});
   }
-  EXPECT_EQ(agreement.same_inliers, agreement.cases);
-  EXPECT_LT(agreement.worst_translation, 1e-9);
-  EXPECT_LT(agreement.worst_rotation, 1e-9);
+  EXPECT_EQ(verdicts.cases, 30);
+  EXPECT_EQ(verdicts.fixed_points, verdicts.cases);
+  EXPECT_LT(verdicts.worst_threshold_difference, 1e-9);
+  EXPECT_EQ(verdicts.minima + verdicts.refused, verdicts.cases);
+}
+
+TEST(RansacOracle, TheOracleCatchesAWrongAnswer) {
+  // The oracle must be able to fail: an inlier dropped, or the motion moved by 1 mm, is seen.
+  const Scene s = make_scene(transform_from_xi(Vector6d::Constant(0.01)), 300, 0.2, 0.003, 7);
+  RigidRansac ransac(paper_config(), SensorNoise{}, 300);
+  Rng rng(7);
+  RansacResult r;
+  ransac.estimate(s.prev, s.curr, rng, r);
+  ASSERT_EQ(r.status, Status::Ok);
+  RansacResult dropped = r;
+  dropped.inliers.pop_back();
+  EXPECT_NE(oracle::refinement_fixed_point(s.prev, s.curr, dropped.inliers, 0.05, SensorNoise{}.depth_noise_coeff).inliers,
+            dropped.inliers);
+  Eigen::Isometry3d moved = r.T_prev_curr;
+  moved.translation().x() += 0.001;
+  EXPECT_TRUE(oracle::is_local_minimum(s.prev, s.curr, r.inliers, SensorNoise{}, r.T_prev_curr, 1e-5, 1e-12));
+  EXPECT_FALSE(oracle::is_local_minimum(s.prev, s.curr, r.inliers, SensorNoise{}, moved, 1e-5, 1e-12));
 }
 
 TEST(Triplet, ClosedFormFitEqualsTheSvdFit) {
@@ -269,13 +297,12 @@ TEST(ScoreKernels, EverySetIsBitExactWithTheReference) {
       def_count += (p - (rc.cast<double>() + Eigen::Vector3d(0.1, -0.2, 0.05))).squaredNorm() < 2.0;
     }
     EXPECT_NEAR(ref_count, def_count, 1) << "n " << n;  // float vs double at the boundary
-    for (const auto& set : simd::compiled_kernel_sets()) {
-      if (!simd::cpu_supports(set)) continue;
+    for (const auto* set : twins_of_reference(&simd::KernelSet::score_rigid)) {
       int count = -1;
       float cost = -1;
-      set.score_rigid(in, count, cost);
-      EXPECT_EQ(count, ref_count) << set.name << " n " << n;
-      EXPECT_EQ(cost, ref_cost) << set.name << " n " << n;
+      set->score_rigid(in, count, cost);
+      EXPECT_EQ(count, ref_count) << set->name << " n " << n;
+      EXPECT_EQ(cost, ref_cost) << set->name << " n " << n;
     }
   }
 }
