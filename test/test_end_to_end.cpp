@@ -21,7 +21,7 @@ struct Replay {
   AccuracySummary summary;
 };
 
-// The ground truth's own noise allowed for as the project's issue 12 judges: 0.3 mm, 0.0015 rad.
+// The ground truth's own noise allowed for: 0.3 mm, 0.0015 rad (the evaluation's usual allowance).
 const GroundTruthAllowance kAllowance{0.0003, 0.0015, "given"};
 
 Replay replay(const Config& config) {
