@@ -268,7 +268,7 @@ TEST(RealtimeFaults, AnUnpluggedSensorIsReopenedAndThePairAcrossTheGapIsFlagged)
   // starts the depth stream later than the colour one). Those pairs are flagged NoDepth, as with
   // a real sensor; once depth flows, every pair solves again.
   enum class Phase { BeforeTheGap, StartingAgain, Flowing } phase = Phase::BeforeTheGap;
-  int lost = 0;
+  int lost = 0, flagged_late = 0;
   for (const PairResult* p : live.pairs()) {
     if (p->status == Status::SensorLost) {
       ++lost;
@@ -279,10 +279,18 @@ TEST(RealtimeFaults, AnUnpluggedSensorIsReopenedAndThePairAcrossTheGapIsFlagged)
       continue;
     }
     if (phase == Phase::StartingAgain && p->status == Status::NoDepth) continue;
+    // Later too, a reader woken late on a loaded machine (ThreadSanitizer, a busy core) flags
+    // a frame NoDepth when its depth partner has not come within the wait: flagged, counted
+    // and tracked on, as in RealtimeLive. Any other failure is a fault.
+    if (p->status == Status::NoDepth) {
+      ++flagged_late;
+      continue;
+    }
     EXPECT_EQ(p->status, Status::Ok) << (phase == Phase::BeforeTheGap ? "before the gap" : "after the gap");
     if (phase == Phase::StartingAgain) phase = Phase::Flowing;
   }
   EXPECT_EQ(lost, 1);
+  EXPECT_LE(flagged_late, 4) << "more than a late reader explains";
   EXPECT_EQ(phase, Phase::Flowing);
   EXPECT_GE(solved_pairs_after_the_gap(live), kPairsAfterTheGap);
   // The 15 frames before the gap, each processed or counted, and those after it.
