@@ -109,8 +109,7 @@ void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
 
 DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& refinement, double depth_noise_coeff,
                            double depth_units_per_m)
-    : camera_(camera),
-      config_(refinement),
+    : config_(refinement),
       depth_noise_coeff_(depth_noise_coeff),
       quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))),
       grid_fx_(static_cast<float>(camera.fx / refinement.stride_px)),

@@ -13,7 +13,8 @@ FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
       min_features_(config.ransac.min_inliers),
       detector_(config.features, runner),
       backprojector_(config.camera, config.depth) {
-  if (config.refinement.enabled) cloud_builder_.emplace(config.camera, config.depth, config.refinement);
+  // The paper's model never refines (pair_estimator.cpp): no clouds to build for it.
+  if (config.refinement.enabled && config.covariance.model != "paper") cloud_builder_.emplace(config.camera, config.depth, config.refinement);
 }
 
 void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {

@@ -195,6 +195,7 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   const Eigen::Isometry3d T_depth = transform_from_xi(xi_from_transform(alignment_.T_prev_curr) / to_depth);
   const Matrix6d own_cov = alignment_.covariance / (to_depth * to_depth);
   const Matrix6d feature_cov = right_perturbation_covariance(fit_.T_prev_curr, covariance);
+  const Vector6d difference = right_perturbation_between(fit_.T_prev_curr, T_depth);
   if (last_pair_) {
     // The depth's lag behind the colour, learnt and reported (DepthLagEstimate). Not corrected
     // here: the change of rate it would be multiplied by is the features' own, as noisy per
@@ -203,14 +204,13 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
     const Vector6d delta_rate = xi_from_transform(fit_.T_prev_curr) / dt_s - last_pair_->rate;
     const double noise = (covariance.bottomRightCorner<3, 3>().trace() / (dt_s * dt_s)) +
                          last_pair_->covariance.bottomRightCorner<3, 3>().trace() / (last_pair_->dt_s * last_pair_->dt_s);
-    depth_lag_.update(right_perturbation_between(fit_.T_prev_curr, T_depth).tail<3>(), delta_rate.tail<3>(), noise);
+    depth_lag_.update(difference.tail<3>(), delta_rate.tail<3>(), noise);
   }
   Matrix6d depth_cov = alignment_trust_.scaled(own_cov);
   depth_cov.bottomRightCorner<3, 3>() += depth_lag_.rotation_covariance();
   // Learnt from every fully constrained pair before the agreement test, which must not censor it.
   if (alignment_.constrained == 6)
-    alignment_trust_.update(right_perturbation_between(fit_.T_prev_curr, T_depth), feature_cov, own_cov,
-                            depth_lag_.rotation_covariance());
+    alignment_trust_.update(difference, feature_cov, own_cov, depth_lag_.rotation_covariance());
   // A sensor whose alignment errs by several times what its residuals say has errors they
   // cannot see (a structured-light depth map's distortion, its lag): they do not average out
   // from pair to pair, and fusing them costs more over a second than it gains per pair (TUM

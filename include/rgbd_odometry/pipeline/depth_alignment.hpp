@@ -75,7 +75,6 @@ class DepthAligner {
   // Grid index in prev of a point in prev's camera frame; -1 outside.
   int project(const Eigen::Vector3f& q, int cols, int rows) const;
 
-  CameraConfig camera_;
   RefinementConfig config_;
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
