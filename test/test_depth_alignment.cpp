@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <random>
 
@@ -152,6 +154,93 @@ TEST(DepthAlignment, ItsCovarianceCoversTheErrorUnderDepthNoise) {
   nees /= n;
   EXPECT_GT(nees, 3.0);
   EXPECT_LT(nees, 20.0);
+}
+
+// Two renderings of the room, each depth off by a draw of N(0, (c Z^2)^2), rounded to the
+// sensor's 1/5000 m units as a real depth map is.
+Scene scene_with_noise_law(const Eigen::Isometry3d& T_prev_curr, double coeff, unsigned seed) {
+  const CameraConfig cam = camera();
+  const Eigen::Isometry3d T_world_prev = motion(0.1, -0.05, 0, 0.02, -0.03, 0.01);
+  cv::Mat d_prev = render(room(), T_world_prev, cam), d_curr = render(room(), T_world_prev * T_prev_curr, cam);
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> n(0, 1);
+  for (cv::Mat* d : {&d_prev, &d_curr})
+    for (auto it = d->begin<float>(); it != d->end<float>(); ++it)
+      *it = std::round((*it + static_cast<float>(coeff) * *it * *it * n(rng)) * 5000.0f) / 5000.0f;
+  Scene s;
+  DepthCloudBuilder builder(cam, DepthConfig{}, refinement());
+  builder.build(d_prev, s.prev);
+  builder.build(d_curr, s.curr);
+  s.T_prev_curr = T_prev_curr;
+  return s;
+}
+
+TEST(DepthAlignment, ItsResidualsReadTheSensorsDepthNoiseLaw) {
+  // GIVEN depth noise of a known law, sigma = c Z^2, from exact (rounding only) to twice the Kinect's
+  const Eigen::Isometry3d truth = motion(0.01, 0.004, -0.006, -0.008, 0.012, 0.004);
+  DepthAligner aligner(camera(), refinement(), 1.425e-3, 5000);
+  for (const double c : {0.0, 0.5e-3, 1.425e-3, 3e-3}) {
+    std::vector<double> read;
+    for (unsigned trial = 1; trial <= 5; ++trial) {
+      const Scene s = scene_with_noise_law(truth, c, trial);
+      DepthAlignment a;
+      aligner.align(s.prev, s.curr, truth, a);
+      ASSERT_TRUE(a.ok);
+      read.push_back(a.depth_noise_coeff);
+    }
+    std::sort(read.begin(), read.end());
+    // THEN each pair reads c back from its residuals, net of the rounding: the median of five
+    // measured 4 % high at 0.5e-3 and 1.425e-3 (noisy normals add a little), 7 % low at 3e-3
+    // (the 5 cm association limit cuts the tails of noise 3.7 cm at 3.5 m); exact depth, 0
+    if (c == 0) {
+      EXPECT_LT(read.back(), 0.05e-3);
+    } else {
+      EXPECT_NEAR(read[2], c, 0.1 * c) << "c " << c;
+    }
+  }
+}
+
+TEST(SensorEstimates, TheDepthNoiseMovesFromItsPriorByAtMostItsRateAndStaysInItsBounds) {
+  DepthNoiseEstimate e(1.425e-3);
+  // GIVEN the Kinect's prior, a sensor whose pairs read exact depth
+  e.update(0);
+  EXPECT_NEAR(e.coeff(), 0.9 * 1.425e-3, 1e-12);  // a tenth of itself per pair at most
+  for (int i = 0; i < 60; ++i) e.update(5e-5);
+  EXPECT_NEAR(e.coeff(), 5e-5, 1e-9);  // reaches the reading, not past it
+  // AND readings that say nothing are ignored; a wild one moves it a tenth
+  e.update(std::nan(""));
+  e.update(-1);
+  EXPECT_NEAR(e.coeff(), 5e-5, 1e-9);
+  EXPECT_EQ(e.pairs(), 61);
+  e.update(1.0);
+  EXPECT_NEAR(e.coeff(), 5.5e-5, 1e-9);
+  for (int i = 0; i < 200; ++i) e.update(0);
+  EXPECT_DOUBLE_EQ(e.coeff(), 1e-5);  // its floor: never zero, so no weight is infinite
+}
+
+// d_rotation = -L (change of angular rate) + noise, the rate changing by ~0.5 rad/s per axis.
+double covered_lag_sigma(double lag_s, int pairs, double prior_s) {
+  RefinementConfig config;
+  DepthLagEstimate lag(config);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> rate(0, 0.5), noise(0, 2e-4);
+  for (int i = 0; i < pairs; ++i) {
+    const Eigen::Vector3d delta(rate(rng), rate(rng), rate(rng));
+    const Eigen::Vector3d d = -lag_s * delta + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    lag.update(d, delta, 0.0);
+  }
+  return lag.covered_sigma_s(prior_s);
+}
+
+TEST(SensorEstimates, TheDepthLatencySigmaIsTheLearntLagBelowItsPrior) {
+  // GIVEN no pair yet: the prior
+  EXPECT_DOUBLE_EQ(covered_lag_sigma(0.003, 0, 0.025), 0.025);
+  // WHEN a synchronised sensor (3 ms) or one lagging 60 ms has been seen for 200 pairs
+  // THEN the first is covered by its lag and the slope's standard error; the second by the prior
+  EXPECT_NEAR(covered_lag_sigma(0.003, 200, 0.025), 0.003, 0.0005);
+  EXPECT_DOUBLE_EQ(covered_lag_sigma(0.060, 200, 0.025), 0.025);
+  // AND after a few pairs the slope's uncertainty still shows: more than the lag alone
+  EXPECT_GT(covered_lag_sigma(0.0, 3, 0.025), 1e-4);
 }
 
 TEST(DepthAlignment, AFlatWallLeavesItsSlidingDirectionsToTheFeatures) {

@@ -80,9 +80,7 @@ void PairTallies::add(const PairResult& r) {
     total.covariance_ms += r.times.covariance_ms;
     ++timed;
     depth_refined += r.depth_points > 0 ? 1 : 0;
-    depth_sigma_scale_t = r.depth_sigma_scale_t;
-    depth_sigma_scale_r = r.depth_sigma_scale_r;
-    depth_lag_s = r.depth_lag_s;
+    sensor = r.sensor;
   }
   rematched += r.rematched ? 1 : 0;
 }
@@ -117,11 +115,13 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   }
   if (tallies.rematched > 0)
     out << "  matching: " << tallies.rematched << " pairs matched again over the whole image (the motion window fell short)\n";
-  if (timed_pairs > 0 && tallies.depth_sigma_scale_t > 0)
+  const SensorEstimates& learnt = tallies.sensor;
+  if (timed_pairs > 0 && learnt.depth_sigma_scale_t > 0) {
     out << std::setprecision(1) << "  depth alignment: fused into " << tallies.depth_refined << " of " << timed_pairs
-        << " good pairs; its own sigma scaled by " << tallies.depth_sigma_scale_t << " (translation) and "
-        << tallies.depth_sigma_scale_r << " (rotation) and the depth " << tallies.depth_lag_s * 1e3
-        << " ms behind the colour on this sensor, learnt against the features\n";
+        << " good pairs; its own sigma scaled by " << learnt.depth_sigma_scale_t << " (translation) and "
+        << learnt.depth_sigma_scale_r << " (rotation), learnt against the features\n";
+    out << "  sensor, learnt from the data: " << sensor_estimates_text(learnt) << "\n";
+  }
   if (!with_groundtruth) {
     out << "  no groundtruth.txt: accuracy not evaluated\n";
     return;

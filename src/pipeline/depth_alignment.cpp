@@ -21,6 +21,11 @@ constexpr int kMinCells = 8;
 // DepthLagEstimate: the prior (L = 0) weighs as much as this many squared rad/s of rate
 // change (a few pairs of a hand-held camera turning), and old pairs fade over this many.
 constexpr double kLagPriorWeight = 0.05;
+// DepthNoiseEstimate: at most this share of itself per pair (from the Kinect's prior to exact
+// depth's in ~30 pairs), and its bounds, /m.
+constexpr double kNoiseRate = 0.1, kNoiseMin = 1e-5, kNoiseMax = 1e-2;
+// The median of a chi^2(1) variable: a median of squared normal residuals over this is their variance.
+constexpr double kChi2Median1 = 0.4549;
 constexpr double kLagMemoryPairs = 300;
 // Normals from the grid neighbours this many steps away: a longer baseline, less noise.
 constexpr int kNormalReach = 1;
@@ -177,6 +182,8 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
         const Eigen::Vector3f pm = p.cross(m);
         term.J = {m.x(), m.y(), m.z(), pm.x(), pm.y(), pm.z()};
         term.cell = (j / cell_grid) * cells_x + i / cell_grid;
+        term.curr_index = j * curr.cols + i;
+        term.prev_index = k;
         terms_.push_back(term);
       }
     if (static_cast<int>(terms_.size()) < config_.min_points) return;
@@ -263,6 +270,40 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   out.T_prev_curr = T;
   out.points = used;
   out.ok = k > 0 && out.covariance.allFinite();
+  if (out.ok) out.depth_noise_coeff = residual_noise_coeff(prev, curr, T);
+}
+
+double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T) {
+  // A depth error e (sigma c Z^2) moves a point X by e X / Z, so r = n . (e_curr X_curr / Z_curr
+  // - e_prev X_prev / Z_prev): var r = c^2 g + rounding, g = Z_curr^4 (n . X_curr / Z_curr)^2 +
+  // Z_prev^4 (n . X_prev / Z_prev)^2. Every 4th association (the last iteration's, residuals at
+  // its start, which its step barely moves).
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const double rounding2 = 2 * quantum_sigma_m_ * quantum_sigma_m_;
+  scaled_.clear();
+  for (size_t k = 0; k < terms_.size(); k += 4) {
+    const Term& term = terms_[k];
+    const Eigen::Vector3f& p = curr.point[static_cast<size_t>(term.curr_index)];
+    const Eigen::Vector3f& target = prev.point[static_cast<size_t>(term.prev_index)];
+    const Eigen::Vector3f& n = prev.normal[static_cast<size_t>(term.prev_index)];
+    const float along_curr = n.dot(R * p) / p.z(), along_prev = n.dot(target) / target.z();
+    const float z2_curr = p.z() * p.z(), z2_prev = target.z() * target.z();
+    const double g = static_cast<double>(z2_curr * z2_curr * along_curr * along_curr +
+                                         z2_prev * z2_prev * along_prev * along_prev);
+    if (!(g > 0)) continue;
+    scaled_.push_back(static_cast<float>((static_cast<double>(term.r) * term.r - kChi2Median1 * rounding2) / g));
+  }
+  if (scaled_.size() < 16) return -1;
+  const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
+  std::nth_element(scaled_.begin(), mid, scaled_.end());
+  return std::sqrt(std::max(static_cast<double>(*mid), 0.0) / kChi2Median1);
+}
+
+void DepthNoiseEstimate::update(double pair_coeff) {
+  if (!(pair_coeff >= 0) || !std::isfinite(pair_coeff)) return;
+  const double step = std::clamp(pair_coeff - c_, -kNoiseRate * c_, kNoiseRate * c_);
+  c_ = std::clamp(c_ + step, kNoiseMin, kNoiseMax);
+  ++pairs_;
 }
 
 AlignmentTrust::AlignmentTrust(const RefinementConfig& config)
@@ -326,9 +367,18 @@ void DepthLagEstimate::update(const Eigen::Vector3d& d_rotation, const Eigen::Ve
   sum_rr_ = keep * sum_rr_ + std::max(signal, 0.0);
   sum_rr_ = std::max(sum_rr_, kLagPriorWeight * keep);  // never below a few pairs' worth
   lag_s_ = std::clamp(-sum_dr_ / sum_rr_, -max_s_, max_s_);
+  residual_ = keep * residual_ + (1 - keep) * (d_rotation + lag_s_ * delta_rate).squaredNorm() / 3.0;
+  residual_weight_ = keep * residual_weight_ + (1 - keep);
   const double noise_per_axis = delta_rate_variance / 3.0;
   moment_ = keep * moment_ + (1 - keep) * (delta_rate * delta_rate.transpose() -
                                            noise_per_axis * Eigen::Matrix3d::Identity());
+}
+
+double DepthLagEstimate::covered_sigma_s(double prior_s) const {
+  if (!(residual_weight_ > 0)) return prior_s;
+  // The slope's variance: the residuals' (per axis) over the rate changes' sum of squares,
+  // which starts at the prior's weight: the first pairs leave it large.
+  return std::min(prior_s, std::sqrt(lag_s_ * lag_s_ + residual_ / residual_weight_ / sum_rr_));
 }
 
 Eigen::Matrix3d DepthLagEstimate::rotation_covariance() const {

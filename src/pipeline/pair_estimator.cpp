@@ -96,6 +96,7 @@ PairEstimator::PairEstimator(const Config& config)
       aligner_(config.camera, config.refinement, config.covariance.depth_noise_coeff, config.depth.units_per_m),
       alignment_trust_(config.refinement),
       depth_lag_(config.refinement),
+      depth_noise_(config.covariance.depth_noise_coeff),
       latency_(latency_sigmas(config.covariance)) {
   // Sized once for the largest possible frame: the pair stage never allocates afterwards.
   const auto capacity = static_cast<size_t>(config.features.max_features);
@@ -192,6 +193,7 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   const Eigen::Isometry3d seed = transform_from_xi(xi_from_transform(fit_.T_prev_curr) * to_depth);
   aligner_.align(prev.cloud, curr.cloud, seed, alignment_);
   if (!alignment_.ok) return 0;
+  depth_noise_.update(alignment_.depth_noise_coeff);
   const Eigen::Isometry3d T_depth = transform_from_xi(xi_from_transform(alignment_.T_prev_curr) / to_depth);
   const Matrix6d own_cov = alignment_.covariance / (to_depth * to_depth);
   const Matrix6d feature_cov = right_perturbation_covariance(fit_.T_prev_curr, covariance);
@@ -316,9 +318,10 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (config_.refinement.enabled && !paper_noise_) {
     mark_cost_stage(CostStage::Refine);
     r.depth_points = refine_with_depth(prev, curr, dt_s, cov);
-    r.depth_sigma_scale_t = alignment_trust_.translation_scale();
-    r.depth_sigma_scale_r = alignment_trust_.rotation_scale();
-    r.depth_lag_s = depth_lag_.lag_s();
+    // What the data say of the sensor; the depth's latency sigma is carried from here on.
+    latency_.depth_s = depth_lag_.covered_sigma_s(config_.covariance.depth_latency_sigma_s);
+    r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
+                latency_.depth_s, depth_noise_.coeff()};
     mark_cost_stage(CostStage::Covariance);
   }
   if (dt_s > 0) {

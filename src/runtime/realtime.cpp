@@ -275,6 +275,7 @@ class Run {
     pin_thread(cpus_, 3);
     auto next_status = Clock::now() + kStatusPeriod;
     std::uint64_t frames_at_status = 0, usb_departures = 0;
+    SensorEstimates learnt;  // as of the last good pair
     if (usb_ && !usb_->problem().empty()) on_message_(usb_->problem());
     for (;;) {
       auto item = outputs_.pop_for(kPoll);
@@ -292,6 +293,7 @@ class Run {
           ++stats_.pairs;
           item->latency_ms = static_cast<double>(steady_now_ns() - item->t_capture_host_ns) * 1e-6;
           stats_.latency.add(item->latency_ms);
+          if (item->result.status == Status::Ok) learnt = item->result.sensor;
         }
         on_output_(*item);
       } else if (outputs_.closed_and_empty()) {
@@ -303,6 +305,7 @@ class Run {
           << " frames/s, " << mailbox_.skipped() + static_cast<std::uint64_t>(feed_.replaced_frames()) << " skipped, " << feed_.dropped_frames()
           << " dropped by the sensor, latency median " << stats_.latency.quantile_ms(0.5) << " ms, p99 "
           << stats_.latency.quantile_ms(0.99) << " ms";
+        if (learnt.depth_sigma_scale_t > 0) s << "; " << sensor_estimates_text(learnt);
         on_message_(s.str());
         frames_at_status = stats_.frames;
         next_status += kStatusPeriod;

@@ -20,7 +20,7 @@ struct PairTallies {
   int timed = 0;          // good pairs
   int rematched = 0;      // windowed matching fell short (PairResult::rematched)
   int depth_refined = 0;  // the depth alignment was fused in (PairResult::depth_points > 0)
-  double depth_sigma_scale_t = 0, depth_sigma_scale_r = 0, depth_lag_s = 0;  // the last good pair's
+  SensorEstimates sensor;  // as learnt by the last good pair
   void add(const PairResult& r);
 };
 

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/core/sensor_estimates.hpp"
 #include "rgbd_odometry/core/status.hpp"
 
 namespace rgbdo {
@@ -30,10 +31,7 @@ struct PairResult {
   int inliers = 0;
   double inlier_threshold_m = 0;
   int depth_points = 0;  // depth points of the alignment fused with the features; 0: features alone
-  // The factors the depth alignment's sigma is scaled by on this sensor, translation and
-  // rotation, as learnt so far (pipeline/depth_alignment.hpp, AlignmentTrust); 0: no alignment.
-  double depth_sigma_scale_t = 0, depth_sigma_scale_r = 0;
-  double depth_lag_s = 0;  // the depth's capture lag behind the colour, as learnt so far
+  SensorEstimates sensor;  // the sensor's constants as learnt up to this pair
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
   StageTimes times;

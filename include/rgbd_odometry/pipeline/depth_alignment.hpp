@@ -62,6 +62,10 @@ struct DepthAlignment {
   int constrained = 0;
   Matrix6d covariance = Matrix6d::Zero();  // of the right perturbation of T_prev_curr, within the basis
   int points = 0;                          // associations used in the last iteration
+  // This pair's depth noise coefficient c (sigma_Z = c Z^2 along each ray), read from the
+  // residuals at the solution net of the depth's rounding; 0 when they are rounding alone,
+  // negative when the alignment failed.
+  double depth_noise_coeff = -1;
 };
 
 class DepthAligner {
@@ -79,10 +83,15 @@ class DepthAligner {
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
   float grid_fx_, grid_fy_, grid_cx_, grid_cy_;  // the intrinsics on the grid
+  // c from the residuals at T: their median, net of rounding, against each association's
+  // noise geometry (both depths along their rays, seen along the normal).
+  double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
+
   struct Term {  // one association: residual along the normal, its weight and Jacobian
     float r, w;
     std::array<float, 6> J;
     int cell;
+    int curr_index, prev_index;  // the two grid samples associated
   };
   std::vector<Term> terms_;
   std::vector<float> scaled_;
@@ -146,11 +155,37 @@ class DepthLagEstimate {
   // d_rotation: rotation part of depth (-) features; delta_rate: the change of angular rate
   // (rad/s); its noise variance summed over the axes.
   void update(const Eigen::Vector3d& d_rotation, const Eigen::Vector3d& delta_rate, double delta_rate_variance);
+  // The sigma of the depth's latency that the covariance should carry (covariance.
+  // depth_latency_sigma_s as prior and ceiling): the learnt lag and its standard error, while
+  // both are below the prior. A lag read above the prior stays at the prior: on TUM fr1 the
+  // reading (40 ms) is above what the motion capture says (25-28 ms), and more would
+  // over-cover its 1-s windows.
+  double covered_sigma_s(double prior_s) const;
 
  private:
   double sum_dr_ = 0, sum_rr_ = 0;  // sum of d . delta and of |delta|^2 - noise, forgetting
+  double residual_ = 0, residual_weight_ = 0;  // running mean square of d + L delta per axis, its weight
   Eigen::Matrix3d moment_ = Eigen::Matrix3d::Zero();  // running mean of delta delta^T - noise
   double lag_s_ = 0, max_s_;
+};
+
+// The sensor's depth noise coefficient c (sigma_Z = c Z^2), learnt online from the depth
+// alignment's residuals (DepthAlignment::depth_noise_coeff): started at the configured prior
+// (covariance.depth_noise_coeff, the Kinect's), moved towards each pair's reading by at most
+// kNoiseRate of itself, kept within [kNoiseMin, kNoiseMax] /m. The residuals of two
+// consecutive frames see the noise of both and any error the pair's depth maps do not share
+// (a structured-light sensor's distortion pattern moving with the camera): on such a sensor
+// it reads high, never low.
+class DepthNoiseEstimate {
+ public:
+  explicit DepthNoiseEstimate(double prior) : c_(prior) {}
+  void update(double pair_coeff);
+  double coeff() const { return c_; }
+  int pairs() const { return pairs_; }
+
+ private:
+  double c_;
+  int pairs_ = 0;
 };
 
 // Fuses a full estimate `a` of one motion with an estimate `b` of its components along the

@@ -61,6 +61,7 @@ class PairEstimator {
   DepthAlignment alignment_;
   AlignmentTrust alignment_trust_;
   DepthLagEstimate depth_lag_;
+  DepthNoiseEstimate depth_noise_;
   std::vector<Match> matches_;
   std::vector<Eigen::Vector2d> predicted_;  // previous keypoints' positions in the current frame
   PointPairs pairs_;
