@@ -218,31 +218,6 @@ TEST(SensorEstimates, TheDepthNoiseMovesFromItsPriorByAtMostItsRateAndStaysInIts
   EXPECT_DOUBLE_EQ(e.coeff(), 1e-5);  // its floor: never zero, so no weight is infinite
 }
 
-// d_rotation = -L (change of angular rate) + noise, the rate changing by ~0.5 rad/s per axis.
-double covered_lag_sigma(double lag_s, int pairs, double prior_s) {
-  RefinementConfig config;
-  DepthLagEstimate lag(config);
-  std::mt19937 rng(7);
-  std::normal_distribution<double> rate(0, 0.5), noise(0, 2e-4);
-  for (int i = 0; i < pairs; ++i) {
-    const Eigen::Vector3d delta(rate(rng), rate(rng), rate(rng));
-    const Eigen::Vector3d d = -lag_s * delta + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-    lag.update(d, delta, 0.0);
-  }
-  return lag.covered_sigma_s(prior_s);
-}
-
-TEST(SensorEstimates, TheDepthLatencySigmaIsTheLearntLagBelowItsPrior) {
-  // GIVEN no pair yet: the prior
-  EXPECT_DOUBLE_EQ(covered_lag_sigma(0.003, 0, 0.025), 0.025);
-  // WHEN a synchronised sensor (3 ms) or one lagging 60 ms has been seen for 200 pairs
-  // THEN the first is covered by its lag and the slope's standard error; the second by the prior
-  EXPECT_NEAR(covered_lag_sigma(0.003, 200, 0.025), 0.003, 0.0005);
-  EXPECT_DOUBLE_EQ(covered_lag_sigma(0.060, 200, 0.025), 0.025);
-  // AND after a few pairs the slope's uncertainty still shows: more than the lag alone
-  EXPECT_GT(covered_lag_sigma(0.0, 3, 0.025), 1e-4);
-}
-
 TEST(DepthAlignment, AFlatWallLeavesItsSlidingDirectionsToTheFeatures) {
   // GIVEN only the back wall in view, square on, the camera sliding along it
   const std::vector<Plane> wall{{{0, 0, 1}, 3.0}};

@@ -8,8 +8,7 @@ namespace rgbdo {
 std::string sensor_estimates_text(const SensorEstimates& e) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(3) << "depth noise " << e.depth_noise_coeff * 1e3 << "e-3 Z^2"
-    << std::setprecision(1) << ", depth " << e.depth_lag_s * 1e3 << " ms behind the colour (covered: sigma "
-    << e.depth_latency_sigma_s * 1e3 << " ms)";
+    << std::setprecision(1) << ", depth " << e.depth_lag_s * 1e3 << " ms behind the colour";
   return s.str();
 }
 

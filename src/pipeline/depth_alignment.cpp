@@ -367,18 +367,9 @@ void DepthLagEstimate::update(const Eigen::Vector3d& d_rotation, const Eigen::Ve
   sum_rr_ = keep * sum_rr_ + std::max(signal, 0.0);
   sum_rr_ = std::max(sum_rr_, kLagPriorWeight * keep);  // never below a few pairs' worth
   lag_s_ = std::clamp(-sum_dr_ / sum_rr_, -max_s_, max_s_);
-  residual_ = keep * residual_ + (1 - keep) * (d_rotation + lag_s_ * delta_rate).squaredNorm() / 3.0;
-  residual_weight_ = keep * residual_weight_ + (1 - keep);
   const double noise_per_axis = delta_rate_variance / 3.0;
   moment_ = keep * moment_ + (1 - keep) * (delta_rate * delta_rate.transpose() -
                                            noise_per_axis * Eigen::Matrix3d::Identity());
-}
-
-double DepthLagEstimate::covered_sigma_s(double prior_s) const {
-  if (!(residual_weight_ > 0)) return prior_s;
-  // The slope's variance: the residuals' (per axis) over the rate changes' sum of squares,
-  // which starts at the prior's weight: the first pairs leave it large.
-  return std::min(prior_s, std::sqrt(lag_s_ * lag_s_ + residual_ / residual_weight_ / sum_rr_));
 }
 
 Eigen::Matrix3d DepthLagEstimate::rotation_covariance() const {

@@ -318,10 +318,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (config_.refinement.enabled && !paper_noise_) {
     mark_cost_stage(CostStage::Refine);
     r.depth_points = refine_with_depth(prev, curr, dt_s, cov);
-    // What the data say of the sensor; the depth's latency sigma is carried from here on.
-    latency_.depth_s = depth_lag_.covered_sigma_s(config_.covariance.depth_latency_sigma_s);
     r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
-                latency_.depth_s, depth_noise_.coeff()};
+                depth_noise_.coeff()};
     mark_cost_stage(CostStage::Covariance);
   }
   if (dt_s > 0) {

@@ -10,9 +10,8 @@ namespace rgbdo {
 struct SensorEstimates {
   // The factors the depth alignment's own sigma is scaled by, translation and rotation (AlignmentTrust).
   double depth_sigma_scale_t = 0, depth_sigma_scale_r = 0;
-  double depth_lag_s = 0;            // the depth's capture lag behind the colour (DepthLagEstimate)
-  double depth_latency_sigma_s = 0;  // the sigma of that lag the covariance carries
-  double depth_noise_coeff = 0;      // sigma_Z = c Z^2, 1/m (DepthNoiseEstimate)
+  double depth_lag_s = 0;        // the depth's capture lag behind the colour (DepthLagEstimate)
+  double depth_noise_coeff = 0;  // sigma_Z = c Z^2, 1/m (DepthNoiseEstimate)
 };
 
 // In a few words, for the summary and the status line.

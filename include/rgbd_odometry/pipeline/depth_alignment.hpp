@@ -155,16 +155,9 @@ class DepthLagEstimate {
   // d_rotation: rotation part of depth (-) features; delta_rate: the change of angular rate
   // (rad/s); its noise variance summed over the axes.
   void update(const Eigen::Vector3d& d_rotation, const Eigen::Vector3d& delta_rate, double delta_rate_variance);
-  // The sigma of the depth's latency that the covariance should carry (covariance.
-  // depth_latency_sigma_s as prior and ceiling): the learnt lag and its standard error, while
-  // both are below the prior. A lag read above the prior stays at the prior: on TUM fr1 the
-  // reading (40 ms) is above what the motion capture says (25-28 ms), and more would
-  // over-cover its 1-s windows.
-  double covered_sigma_s(double prior_s) const;
 
  private:
   double sum_dr_ = 0, sum_rr_ = 0;  // sum of d . delta and of |delta|^2 - noise, forgetting
-  double residual_ = 0, residual_weight_ = 0;  // running mean square of d + L delta per axis, its weight
   Eigen::Matrix3d moment_ = Eigen::Matrix3d::Zero();  // running mean of delta delta^T - noise
   double lag_s_ = 0, max_s_;
 };
