@@ -15,10 +15,11 @@ allowed() {
     simd)     echo "core simd" ;;
     pipeline) echo "core simd pipeline" ;;
     io)       echo "core simd pipeline io" ;;
+    eval)     echo "core simd pipeline io eval" ;;
     link)     echo "core link" ;;
     sensor)   echo "core simd pipeline io sensor" ;;
     runtime)  echo "core simd pipeline io sensor runtime" ;;
-    app)      echo "core simd pipeline io link sensor runtime app" ;;
+    app)      echo "core simd pipeline io eval link sensor runtime app" ;;
   esac
 }
 forbidden() {
@@ -29,13 +30,14 @@ forbidden() {
     simd)     echo "opencv2|Eigen|$devices|$threads_and_wires" ;;
     pipeline) echo "$devices|$threads_and_wires" ;;
     io)       echo "$devices|$threads_and_wires" ;;
+    eval)     echo "$devices|$threads_and_wires" ;;
     link)     echo "opencv2|$devices" ;;
     *)        echo '^$' ;;
   esac
 }
 
 checked=0
-for layer in core simd pipeline io link sensor runtime app; do
+for layer in core simd pipeline io eval link sensor runtime app; do
   files=$(ls "$repo/src/$layer"/*.cpp "$repo/src/$layer"/*.hpp "$repo/include/rgbd_odometry/$layer"/*.hpp 2>/dev/null)
   [ "$layer" = simd ] && files="$files $(find "$repo/simd" -name '*.cpp' -o -name '*.hpp')"
   for f in $files; do

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
-#include "rgbd_odometry/io/evaluate.hpp"
+#include "rgbd_odometry/eval/evaluate.hpp"
 #include "rgbd_odometry/pipeline/integrate.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"

@@ -8,8 +8,8 @@
 #include <functional>
 
 #include "rgbd_odometry/core/rng.hpp"
-#include "rgbd_odometry/io/evaluate.hpp"
-#include "rgbd_odometry/io/groundtruth_noise.hpp"
+#include "rgbd_odometry/eval/evaluate.hpp"
+#include "rgbd_odometry/eval/groundtruth_noise.hpp"
 
 namespace rgbdo {
 namespace {

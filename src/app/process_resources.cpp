@@ -38,4 +38,26 @@ std::string describe(const ProcessResources& r) {
   return s.str();
 }
 
+void ResourceSampler::frame() {
+  ++frames_;
+  if (frames_ == kWarmUpFrames) warm_ = process_resources(frames_);
+  if (frames_ == next_doubling_) {
+    doubling_before_ = doubling_;
+    doubling_ = process_resources(frames_);
+    next_doubling_ *= 2;
+  }
+  if (frames_ > kWarmUpFrames && frames_ % kPeriod == 0) {
+    previous_ = latest_;  // the last sample may fall while the source's threads wind down
+    latest_ = process_resources(frames_);
+  }
+}
+
+std::string ResourceSampler::summary() const {
+  if (!warm_ || !previous_) return "";
+  const auto& halfway = doubling_ && doubling_->frames * 2 <= previous_->frames ? doubling_ : doubling_before_;
+  std::string s = describe(*warm_) + "; ";
+  if (halfway) s += describe(*halfway) + "; ";
+  return s + describe(*previous_);
+}
+
 }  // namespace rgbdo

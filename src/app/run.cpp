@@ -2,18 +2,18 @@
 
 #include <atomic>
 #include <cstdlib>
-#include <iomanip>
 #include <memory>
-#include <optional>
 #include <ostream>
+#include <vector>
 
+#include "rgbd_odometry/app/odometry_sinks.hpp"
 #include "rgbd_odometry/app/process_resources.hpp"
 #include "rgbd_odometry/app/report.hpp"
 #include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/core/time_format.hpp"
 #include "rgbd_odometry/io/config_file.hpp"
-#include "rgbd_odometry/io/evaluate.hpp"
+#include "rgbd_odometry/eval/evaluate.hpp"
 #include "rgbd_odometry/io/odometry_log.hpp"
 #include "rgbd_odometry/link/flight_link.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
@@ -113,62 +113,41 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     return 2;
   }
   AccuracyEvaluator evaluator(groundtruth, allowance);
+  // The outputs, in the order each frame reaches them.
+  std::vector<std::unique_ptr<OdometrySink>> sinks;
+  if (log) sinks.push_back(std::make_unique<LogSink>(*log));
+  if (flight) sinks.push_back(std::make_unique<FlightLinkSink>(*flight));
+  if (trajectory) sinks.push_back(std::make_unique<TrajectorySink>(*trajectory));
+  sinks.push_back(std::make_unique<EvaluationSink>(evaluator, origin));
+  if (!options.quiet) sinks.push_back(std::make_unique<ConsoleSink>(out, options.verbose));
   PairTallies tallies;
+  ResourceSampler resources;
   size_t pair_count = 0;
-  // Resources after warm-up, about halfway and at the latest sample, taken on the output thread
-  // while every pipeline thread runs: a long run's summary shows whether memory, descriptors or
-  // threads grow. Memory settles in steps (buffers reaching their largest frame, the heap's
-  // top) in the first few thousand frames; a leak grows on: halfway to the end shows which.
-  // The halfway samples are taken at doubling frame counts, so one of the last two is between
-  // a quarter and a half of the run.
-  constexpr std::uint64_t kWarmUpFrames = 200, kResourcePeriod = 50;
-  std::uint64_t output_frames = 0, next_doubling = 2 * kWarmUpFrames;
-  std::optional<ProcessResources> warm, latest, previous;  // previous: at least a period before the end
-  std::optional<ProcessResources> doubling, doubling_before;
   std::string output_error;
   // Runs on the pipeline's output thread, one frame at a time, in capture order.
   const auto on_output = [&](const PairOutput& item) {
     if (!output_error.empty()) return;
-    ++output_frames;
-    if (output_frames == kWarmUpFrames) warm = process_resources(output_frames);
-    if (output_frames == next_doubling) {
-      doubling_before = doubling;
-      doubling = process_resources(output_frames);
-      next_doubling *= 2;
-    }
-    if (output_frames > kWarmUpFrames && output_frames % kResourcePeriod == 0) {
-      previous = latest;  // the last sample may fall while the source's threads wind down
-      latest = process_resources(output_frames);
-    }
+    resources.frame();
     try {
       if (!item.frame_problem.empty())
         err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_host_ns()) << ": "
             << item.frame_problem << "\n";
       if (!item.has_pair) {
-        if (trajectory) trajectory->write(item.t_frame_host_ns(), integrator.pose());
+        for (const auto& sink : sinks) sink->frame(item, integrator.pose());
         return;
       }
       const PairResult& r = item.result;
       if (PairEstimator::dropped_frame(r)) {
         // Logged and said, nothing else: no pose, no message, no evaluation over no time.
-        if (log) log->write(r);
+        for (const auto& sink : sinks) sink->dropped(item);
         err << "rgbd-odometry: frame at " << format_seconds(item.t_frame_host_ns())
             << " dropped: its capture time is not after the previous frame's\n";
         return;
       }
       if (r.status == Status::Ok) integrator.add(r.T_prev_curr);
       tallies.add(r);
-      if (log) log->write(r);
-      if (flight) flight->send_pair(r);
-      if (trajectory) trajectory->write(item.t_frame_host_ns(), integrator.pose());
-      evaluator.add(r, origin.inverse() * integrator.pose());
+      for (const auto& sink : sinks) sink->pair(item, pair_count, integrator.pose());
       ++pair_count;
-      if (!options.quiet) {
-        out << pair_line(r, pair_count - 1, options.verbose);
-        if (item.skipped > 0) out << "  (" << item.skipped << " frames skipped)";
-        if (options.verbose) out << std::fixed << std::setprecision(1) << " | latency " << item.latency_ms << " ms";
-        out << "\n";
-      }
     } catch (const std::exception& e) {
       output_error = e.what();  // reported once the run has stopped
       g_stop = true;
@@ -216,12 +195,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), tallies, run);
-  if (warm && previous) {
-    const auto& halfway = doubling && doubling->frames * 2 <= previous->frames ? doubling : doubling_before;
-    out << "  resources: " << describe(*warm) << "; ";
-    if (halfway) out << describe(*halfway) << "; ";
-    out << describe(*previous) << "\n";
-  }
+  if (const std::string sampled = resources.summary(); !sampled.empty()) out << "  resources: " << sampled << "\n";
   if (flight) {
     const LinkStats st = flight->stats();
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "rgbd_odometry/core/pair_result.hpp"
-#include "rgbd_odometry/io/evaluate.hpp"
+#include "rgbd_odometry/eval/evaluate.hpp"
 #include "rgbd_odometry/runtime/realtime.hpp"
 
 namespace rgbdo {

@@ -5,7 +5,7 @@
 // before it is stamped, and the colour and depth streams of an unsynchronised sensor (Kinect
 // v1, Xtion) are captured at different times. Against TUM's motion capture, fr1's Kinect
 // matches best with the colour taken 14-19 ms and the depth 39-42 ms before their stamps, at
-// every frame rate tried (`io/evaluate`'s time offsets; src/pipeline/README.md). The per-frame
+// every frame rate tried (`eval/evaluate`'s time offsets; src/pipeline/README.md). The per-frame
 // stamp jitter (covariance.timing_sigma_s) does not see such a latency: it is the same for
 // every frame. What it does:
 //  - colour, latency d_c: the pair measures the motion over [t_prev - d_c, t_curr - d_c]

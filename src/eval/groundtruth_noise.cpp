@@ -1,4 +1,4 @@
-#include "rgbd_odometry/io/groundtruth_noise.hpp"
+#include "rgbd_odometry/eval/groundtruth_noise.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "rgbd_odometry/core/pair_result.hpp"
-#include "rgbd_odometry/io/groundtruth_noise.hpp"
+#include "rgbd_odometry/eval/groundtruth_noise.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 
 namespace rgbdo {

@@ -1,4 +1,4 @@
-#include "rgbd_odometry/io/evaluate.hpp"
+#include "rgbd_odometry/eval/evaluate.hpp"
 
 #include <algorithm>
 #include <cmath>
