@@ -303,7 +303,6 @@ void DepthNoiseEstimate::update(double pair_coeff) {
   if (!(pair_coeff >= 0) || !std::isfinite(pair_coeff)) return;
   const double step = std::clamp(pair_coeff - c_, -kNoiseRate * c_, kNoiseRate * c_);
   c_ = std::clamp(c_ + step, kNoiseMin, kNoiseMax);
-  ++pairs_;
 }
 
 AlignmentTrust::AlignmentTrust(const RefinementConfig& config)

@@ -174,11 +174,9 @@ class DepthNoiseEstimate {
   explicit DepthNoiseEstimate(double prior) : c_(prior) {}
   void update(double pair_coeff);
   double coeff() const { return c_; }
-  int pairs() const { return pairs_; }
 
  private:
   double c_;
-  int pairs_ = 0;
 };
 
 // Fuses a full estimate `a` of one motion with an estimate `b` of its components along the
