@@ -17,18 +17,18 @@ constexpr double kMinRelativeInformation = 1e-6;
 // Fewer image cells with associations than this and the cells' spread says too little of
 // the residuals' correlation: the alignment is not used.
 constexpr int kMinCells = 8;
-// The Gauss-Newton steps stop below these (m, rad).
 // DepthLagEstimate: the prior (L = 0) weighs as much as this many squared rad/s of rate
 // change (a few pairs of a hand-held camera turning), and old pairs fade over this many.
 constexpr double kLagPriorWeight = 0.05;
+constexpr double kLagMemoryPairs = 300;
 // DepthNoiseEstimate: at most this share of itself per pair (from the Kinect's prior to exact
 // depth's in ~30 pairs), and its bounds, /m.
 constexpr double kNoiseRate = 0.1, kNoiseMin = 1e-5, kNoiseMax = 1e-2;
 // The median of a chi^2(1) variable: a median of squared normal residuals over this is their variance.
 constexpr double kChi2Median1 = 0.4549;
-constexpr double kLagMemoryPairs = 300;
 // Normals from the grid neighbours this many steps away: a longer baseline, less noise.
 constexpr int kNormalReach = 1;
+// The Gauss-Newton steps stop below these (m, rad).
 constexpr double kStepTranslationM = 1e-5, kStepRotationRad = 1e-5;
 
 }  // namespace
