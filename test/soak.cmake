@@ -55,17 +55,19 @@ elseif(distinct GREATER distinct_allowed)
   message(FATAL_ERROR "repeated input gave ${distinct} distinct motions over ${compared} pairs (one pass has 40 pairs)")
 endif()
 
-if(NOT stdout MATCHES "resources: ")
+if(NOT stdout MATCHES "resources, memory the least over [0-9]+ frames: ")
   # Too few frames came out for a sample after warm-up (under qemu or a sanitizer the reader
   # skips frames it cannot keep up with): the accounting above is what this run can prove.
-  if(delivered GREATER 1000 OR processed GREATER 300)
+  if(delivered GREATER 1000 OR processed GREATER 800)
     message(FATAL_ERROR "no resource line in the summary:\n${stdout}")
   endif()
   message(STATUS "${delivered} frames delivered, all accounted for; too few processed for a resource comparison")
   return()
 endif()
-# "resources: after 200 frames RSS X MB, F fds, T threads; [after H frames ...; ]after N frames ..."
-string(REGEX MATCH "resources: [^\n]*" resources "${stdout}")
+# "resources, memory the least over 200 frames: after 200 frames RSS X MB, F fds, T threads;
+# [after H frames ...; ]after N frames ...": memory the least of each window's samples, so that
+# a buffer in flight when one is taken (a colour frame being decoded: 0.9 MB) does not count.
+string(REGEX MATCH "resources, memory the least over [0-9]+ frames: [^\n]*" resources "${stdout}")
 string(REGEX MATCHALL "after [0-9]+ frames RSS [0-9.]+ MB, [0-9]+ fds, [0-9]+ threads" samples "${resources}")
 list(LENGTH samples sample_count)
 if(sample_count LESS 2)
@@ -101,8 +103,12 @@ endif()
 # Memory settles in steps over the first thousands of frames (measured, sampling /proc every
 # 3 s with a CPU hog on each core: +2.4 MB by frame 500, +0.9 MB near frame 2,000, flat to
 # 5,000; 100,000 frames: +2.6 MB in all), so two bounds: after warm-up, MAX_GROWTH_MB in all;
-# from the halfway sample (a quarter to half of the run) to the end, MAX_LATE_GROWTH_MB,
-# which a leak of 150 bytes per frame exceeds over 10,000 frames.
+# from the halfway window (a quarter to half of the run) to the end, MAX_LATE_GROWTH_MB, which
+# a leak of 300 bytes per frame exceeds over 10,000 frames. Even as the least of each window's
+# samples, memory wanders by up to 0.8 MB from window to window under load (measured: four runs
+# of 10,000 frames, a CPU hog on each core: late growth 0.0-0.8 MB), so this is a backstop for
+# leaks and growing containers; that the pipeline allocates nothing per frame at all after
+# warm-up is test_allocations' exact count.
 math(EXPR growth "${rss_end_tenths} - ${rss_warm_tenths}")
 math(EXPR late_growth "${rss_end_tenths} - ${rss_half_tenths}")
 math(EXPR allowed "${MAX_GROWTH_MB} * 10")

@@ -1,5 +1,6 @@
 #include "rgbd_odometry/app/process_resources.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -40,15 +41,25 @@ std::string describe(const ProcessResources& r) {
 
 void ResourceSampler::frame() {
   ++frames_;
-  if (frames_ == kWarmUpFrames) warm_ = process_resources(frames_);
-  if (frames_ == next_doubling_) {
-    doubling_before_ = doubling_;
-    doubling_ = process_resources(frames_);
-    next_doubling_ *= 2;
+  if (frames_ < kWarmUpFrames || (frames_ - kWarmUpFrames) % kPeriod != 0) return;
+  const ProcessResources sample = process_resources(frames_);
+  if (open_samples_ == 0) {
+    open_ = sample;
+  } else {
+    open_.rss_mb = std::min(open_.rss_mb, sample.rss_mb);
   }
-  if (frames_ > kWarmUpFrames && frames_ % kPeriod == 0) {
-    previous_ = latest_;  // the last sample may fall while the source's threads wind down
-    latest_ = process_resources(frames_);
+  if (++open_samples_ < kWindowSamples) return;
+  open_samples_ = 0;
+  if (!warm_) {
+    warm_ = open_;
+    return;
+  }
+  previous_ = latest_;  // the latest window may close while the source's threads wind down
+  latest_ = open_;
+  if (open_.frames >= next_doubling_) {
+    doubling_before_ = doubling_;
+    doubling_ = open_;
+    while (next_doubling_ <= open_.frames) next_doubling_ *= 2;
   }
 }
 
@@ -56,7 +67,7 @@ std::string ResourceSampler::summary() const {
   if (!warm_ || !previous_) return "";
   const auto& halfway = doubling_ && doubling_->frames * 2 <= previous_->frames ? doubling_ : doubling_before_;
   std::string s = describe(*warm_) + "; ";
-  if (halfway) s += describe(*halfway) + "; ";
+  if (halfway && halfway->frames > warm_->frames && halfway->frames < previous_->frames) s += describe(*halfway) + "; ";
   return s + describe(*previous_);
 }
 

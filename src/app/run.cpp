@@ -195,7 +195,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), tallies, run);
-  if (const std::string sampled = resources.summary(); !sampled.empty()) out << "  resources: " << sampled << "\n";
+  if (const std::string sampled = resources.summary(); !sampled.empty()) out << "  resources, memory the least over " << ResourceSampler::kWindowFrames << " frames: " << sampled << "\n";
   if (flight) {
     const LinkStats st = flight->stats();
     out << "  link: " << st.frames_sent << " MAVLink frames sent, " << st.frames_dropped_queue_full + st.frames_dropped_link_down
