@@ -18,10 +18,25 @@ TEST(PhysicalPointNoise, KeypointErrorGrowsWithThePyramidLevelAcrossTheRay) {
   const PointNoise level5 = physical_point_noise(p, 5, Eigen::Vector2d::Zero(), model);
   EXPECT_NEAR(level0.lateral.x(), 0.289 * 2.0 / model.fx, 1e-12);
   EXPECT_NEAR(level5.lateral.x() / level0.lateral.x(), std::pow(1.2, 5), 1e-9);
-  // The depth error lies along the viewing ray, sigma c Z^2 on flat depth.
-  EXPECT_NEAR(level0.ray.z(), 1.425e-3 * 4.0, 1e-12);
+  // The depth error lies along the viewing ray, sigma c Z^2 on flat depth, with the rounding
+  // to the depth map's unit (TUM: 0.2 mm, uniform).
+  EXPECT_NEAR(level0.ray.z(), std::hypot(1.425e-3 * 4.0, 0.2e-3 / std::sqrt(12.0)), 1e-12);
   EXPECT_NEAR(level0.ray.x() / level0.ray.z(), p.x() / p.z(), 1e-12);
   EXPECT_EQ(level0.ray, level5.ray);  // no slope: the pixel error does not reach the depth
+}
+
+TEST(PhysicalPointNoise, ExactDepthKeepsItsRoundingAndTheKeypointsSlopeError) {
+  // A sensor with no depth noise at all and no lateral depth error (ICL-NUIM's rendering):
+  // the ray's sigma never reaches zero, so the final fit's weights stay finite.
+  SensorNoise exact;
+  exact.depth_noise_coeff = 0;
+  exact.depth_lateral_sigma_px = 0;
+  const Eigen::Vector3d p(0, 0, 2.0);
+  const PointNoise flat = physical_point_noise_px(p, 0.3, Eigen::Vector2d::Zero(), exact);
+  EXPECT_NEAR(flat.ray.z(), 0.2e-3 / std::sqrt(12.0), 1e-15);
+  const PointNoise steep = physical_point_noise_px(p, 0.3, Eigen::Vector2d(0.01, 0), exact);
+  EXPECT_NEAR(steep.ray.z(), std::hypot(0.2e-3 / std::sqrt(12.0), 0.01 * 0.3), 1e-15);
+  EXPECT_GT(steep.covariance().determinant(), 0);
 }
 
 TEST(PhysicalPointNoise, SteepDepthAddsThePixelAndDepthMapLateralErrors) {

@@ -90,6 +90,7 @@ PairEstimator::PairEstimator(const Config& config)
     : config_(config),
       paper_noise_(config.covariance.model == "paper"),
       noise_(sensor_noise(config)),
+      fit_noise_(fit_weight_noise(noise_)),
       matcher_(config.matching.ratio),
       ransac_(config.ransac, sensor_noise(config), config.features.max_features),
       covariance_(config.covariance, config.features.max_features),
@@ -97,6 +98,8 @@ PairEstimator::PairEstimator(const Config& config)
       alignment_trust_(config.refinement),
       depth_lag_(config.refinement),
       depth_noise_(config.covariance.depth_noise_coeff),
+      keypoint_sigma_(config.covariance.pixel_sigma_px, config.features.orb_scale_factor, config.features.orb_levels,
+                      config.features.max_features),
       latency_(latency_sigmas(config.covariance)) {
   // Sized once for the largest possible frame: the pair stage never allocates afterwards.
   const auto capacity = static_cast<size_t>(config.features.max_features);
@@ -108,6 +111,8 @@ PairEstimator::PairEstimator(const Config& config)
   inlier_cells_.reserve(capacity);
   inlier_curr_noise_.reserve(capacity);
   pairs_.match_index.reserve(capacity);
+  pair_covariances_.prev.reserve(capacity);
+  pair_covariances_.curr.reserve(capacity);
   fit_.inliers.reserve(capacity);
   refined_.inliers.reserve(capacity);
 }
@@ -138,9 +143,49 @@ Status PairEstimator::match_and_fit(const ProcessedFrame& prev, const ProcessedF
   Rng ransac_rng(mix(config_.seed, 2 * pair_key));
   mark_cost_stage(CostStage::Ransac);
   t0 = Clock::now();
-  ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_);
+  describe_pair_noise(prev, curr);
+  ransac_.estimate(pairs_.prev, pairs_.curr, ransac_rng, fit_, &pair_covariances_);
   r.times.ransac_ms += ms_since(t0);
   return fit_.status;
+}
+
+// Detectors other than ORB's pyramid number their octaves otherwise: kept within ORB's levels.
+PointNoise PairEstimator::keypoint_noise(const ProcessedFrame& frame, size_t keypoint, const Eigen::Vector3d& p) const {
+  const int level = std::clamp(frame.features.keypoints[keypoint].octave, 0, config_.features.orb_levels - 1);
+  return physical_point_noise(p, level, frame.geometry.depth_gradient[keypoint], noise_);
+}
+
+Eigen::Matrix3d PairEstimator::fit_covariance(const ProcessedFrame& frame, size_t keypoint,
+                                              const Eigen::Vector3d& p) const {
+  const int level = std::clamp(frame.features.keypoints[keypoint].octave, 0, config_.features.orb_levels - 1);
+  return physical_point_noise_px(p, keypoint_sigma_.sigma_px(level), frame.geometry.depth_gradient[keypoint], fit_noise_)
+      .covariance();
+}
+
+void PairEstimator::describe_pair_noise(const ProcessedFrame& prev, const ProcessedFrame& curr) {
+  pair_covariances_.prev.clear();
+  pair_covariances_.curr.clear();
+  if (paper_noise_) return;  // the paper's fit: point_covariance()
+  fit_noise_.depth_noise_coeff = depth_noise_.coeff();  // the depth noise as learnt so far
+  for (size_t k = 0; k < pairs_.size(); ++k) {
+    const Match& m = matches_[static_cast<size_t>(pairs_.match_index[k])];
+    pair_covariances_.prev.push_back(fit_covariance(prev, static_cast<size_t>(m.prev), pairs_.prev[k]));
+    pair_covariances_.curr.push_back(fit_covariance(curr, static_cast<size_t>(m.curr), pairs_.curr[k]));
+  }
+}
+
+void PairEstimator::learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr) {
+  const Eigen::Isometry3d curr_from_prev = fit_.T_prev_curr.inverse();
+  for (int k : fit_.inliers) {
+    const Match& m = matches_[static_cast<size_t>(pairs_.match_index[static_cast<size_t>(k)])];
+    const int level = prev.features.keypoints[static_cast<size_t>(m.prev)].octave;
+    if (level != curr.features.keypoints[static_cast<size_t>(m.curr)].octave) continue;
+    const Eigen::Vector3d q = curr_from_prev * pairs_.prev[static_cast<size_t>(k)];
+    if (!(q.z() > 0)) continue;
+    const Eigen::Vector2d off = q.head<2>() / q.z() - curr.geometry.normalized[static_cast<size_t>(m.curr)];
+    keypoint_sigma_.add(level, std::hypot(off.x() * config_.camera.fx, off.y() * config_.camera.fy));
+  }
+  keypoint_sigma_.update();
 }
 
 void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s) {
@@ -162,12 +207,8 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
     const auto i = static_cast<size_t>(m.prev), j = static_cast<size_t>(m.curr);
     const Eigen::Vector2d pixel_velocity =
         dt_s > 0 ? Eigen::Vector2d((curr.geometry.pixel[j] - prev.geometry.pixel[i]) / dt_s) : Eigen::Vector2d::Zero();
-    // Detectors other than ORB's pyramid number their octaves otherwise: kept within ORB's levels.
-    const auto level = [&](const cv::KeyPoint& kp) { return std::clamp(kp.octave, 0, config_.features.orb_levels - 1); };
-    PointNoise np = physical_point_noise(pairs_.prev[k], level(prev.features.keypoints[i]),
-                                         prev.geometry.depth_gradient[i], noise_);
-    PointNoise nc = physical_point_noise(pairs_.curr[k], level(curr.features.keypoints[j]),
-                                         curr.geometry.depth_gradient[j], noise_);
+    PointNoise np = keypoint_noise(prev, i, pairs_.prev[k]);
+    PointNoise nc = keypoint_noise(curr, j, pairs_.curr[k]);
     np.depth_rate_mps = depth_rate(pairs_.prev[k], prev.geometry.depth_gradient[i], pixel_velocity);
     nc.depth_rate_mps = depth_rate(pairs_.curr[k], curr.geometry.depth_gradient[j], pixel_velocity);
     inlier_prev_noise_.push_back(np);
@@ -284,7 +325,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
     r.times.backproject_ms += ms_since(t0);
     mark_cost_stage(CostStage::Ransac);
     t0 = Clock::now();
-    ransac_.refine(pairs_.prev, pairs_.curr, fit_.T_prev_curr, refined_);
+    describe_pair_noise(prev, curr);
+    ransac_.refine(pairs_.prev, pairs_.curr, fit_.T_prev_curr, refined_, &pair_covariances_);
     r.times.ransac_ms += ms_since(t0);
     if (refined_.status == Status::Ok) {
       refined_.hypotheses = fit_.hypotheses;
@@ -294,6 +336,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
 
   mark_cost_stage(CostStage::Covariance);
   t0 = Clock::now();
+  if (!paper_noise_) learn_keypoint_sigma(prev, curr);
   inlier_prev_.clear();
   inlier_curr_.clear();
   for (int k : fit_.inliers) {
@@ -319,7 +362,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
     mark_cost_stage(CostStage::Refine);
     r.depth_points = refine_with_depth(prev, curr, dt_s, cov);
     r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
-                depth_noise_.coeff()};
+                depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),
+                keypoint_sigma_.sigma_px(keypoint_sigma_.levels() - 1), keypoint_sigma_.levels() - 1};
     mark_cost_stage(CostStage::Covariance);
   }
   if (dt_s > 0) {

@@ -47,7 +47,10 @@ void RigidRansac::select_inliers(const std::vector<Eigen::Vector3d>& prev, const
 
 Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d>& prev,
                                                const std::vector<Eigen::Vector3d>& curr,
-                                               const std::vector<int>& inliers, Eigen::Isometry3d T) const {
+                                               const std::vector<int>& inliers,
+                                               const PointPairCovariances* covariances, Eigen::Isometry3d T) const {
+  const bool own = covariances != nullptr && covariances->prev.size() == prev.size() &&
+                   covariances->curr.size() == curr.size();
   constexpr int kIterations = 5;
   using Matrix6d = Eigen::Matrix<double, 6, 6>;
   using Vector6d = Eigen::Matrix<double, 6, 1>;
@@ -55,11 +58,13 @@ Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d
     Matrix6d H = Matrix6d::Zero();
     Vector6d g = Vector6d::Zero();
     for (int k : inliers) {
-      const Eigen::Vector3d& p = prev[static_cast<size_t>(k)];
-      const Eigen::Vector3d y = T * curr[static_cast<size_t>(k)];
+      const auto i = static_cast<size_t>(k);
+      const Eigen::Vector3d& p = prev[i];
+      const Eigen::Vector3d y = T * curr[i];
       const Eigen::Vector3d r = p - y;
-      const Eigen::Matrix3d C = point_covariance(p, noise_) +
-                                T.linear() * point_covariance(curr[static_cast<size_t>(k)], noise_) * T.linear().transpose();
+      const Eigen::Matrix3d C = own ? Eigen::Matrix3d(covariances->prev[i] + T.linear() * covariances->curr[i] * T.linear().transpose())
+                                    : Eigen::Matrix3d(point_covariance(p, noise_) +
+                                                      T.linear() * point_covariance(curr[i], noise_) * T.linear().transpose());
       const Eigen::Matrix3d W = C.inverse();
       // r(delta) = p - exp(delta) y ~ r - dt + [y]x dw  =>  J = [-I, [y]x]
       Eigen::Matrix<double, 3, 6> J;
@@ -100,7 +105,7 @@ bool RigidRansac::sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev,
 }
 
 void RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, Rng& rng,
-                           RansacResult& result) {
+                           RansacResult& result, const PointPairCovariances* covariances) {
   result.status = Status::RansacFailed;
   result.T_prev_curr = Eigen::Isometry3d::Identity();
   result.inliers.clear();
@@ -113,7 +118,7 @@ void RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::
     result.status = Status::DegenerateSample;
     return;
   }
-  refine(prev, curr, best, result);
+  refine(prev, curr, best, result, covariances);
   result.hypotheses = hypotheses;
 }
 
@@ -172,7 +177,8 @@ int RigidRansac::sample_hypotheses(const std::vector<Eigen::Vector3d>& prev, con
 }
 
 void RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                         const Eigen::Isometry3d& initial, RansacResult& result) {
+                         const Eigen::Isometry3d& initial, RansacResult& result,
+                         const PointPairCovariances* covariances) {
   result.T_prev_curr = initial;
   result.hypotheses = 0;
   double threshold = config_.inlier_threshold_m;
@@ -204,7 +210,7 @@ void RigidRansac::refine(const std::vector<Eigen::Vector3d>& prev, const std::ve
   }
   result.threshold_m = threshold;
   if (inliers.size() >= 3) {
-    const Eigen::Isometry3d refined = fit_anisotropic(prev, curr, inliers, result.T_prev_curr);
+    const Eigen::Isometry3d refined = fit_anisotropic(prev, curr, inliers, covariances, result.T_prev_curr);
     // The refinement corrects the least-squares fit by noise-level amounts. A jump of more
     // than the inlier threshold means a near-degenerate geometry: keep the plain fit.
     const Eigen::Isometry3d change = result.T_prev_curr.inverse() * refined;

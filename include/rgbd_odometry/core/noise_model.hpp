@@ -9,9 +9,11 @@
 // The physical model follows the measurement P = Z (x_n, y_n, 1):
 //  - the keypoint's pixel is off by sigma_px = pixel_sigma_px * scale^level in u and v (its
 //    pyramid level's grid), moving P across the viewing ray by sigma_px Z / f;
-//  - the depth is off along the ray: axially c Z^2 (Khoshelham & Elberink), plus, where the
-//    surface is steep in the image, the depth slope |grad Z| (m/px) times the pixel error and
-//    times the depth map's own lateral noise (Nguyen, Izadi & Lovell 2012: ~0.8 px);
+//  - the depth is off along the ray: axially c Z^2 (Khoshelham & Elberink) and its rounding to
+//    the depth map's unit, plus, where the surface is steep in the image, the depth slope
+//    |grad Z| (m/px) times the pixel error and times the depth map's own lateral noise
+//    (Nguyen, Izadi & Lovell 2012: ~0.8 px). The slope and rounding terms do not vanish with
+//    c: a sensor whose depth is exact still samples it at an uncertain pixel;
 //  - a capture-time error of the frame's depth moves every depth by its rate dZ/dt times the
 //    same error (depth_rate_mps), an error common to the frame, handled by the covariance.
 // point_covariance() is the 3x3 form the final fit weights by.
@@ -57,33 +59,53 @@ struct SensorNoise {
   double level_scale = FeatureConfig{}.orb_scale_factor;            // pyramid scale per level
   double depth_lateral_sigma_px = CovarianceConfig{}.depth_lateral_sigma_px;
   double fx = CameraConfig{}.fx, fy = CameraConfig{}.fy;
+  double depth_rounding_sigma_m = 1.0 / (DepthConfig{}.units_per_m * std::sqrt(12.0));  // one unit, uniform
 };
 
 inline SensorNoise sensor_noise(const Config& c) {
   return {c.covariance.depth_noise_coeff, c.covariance.pixel_sigma_px, c.features.orb_scale_factor,
-          c.covariance.depth_lateral_sigma_px, c.camera.fx, c.camera.fy};
+          c.covariance.depth_lateral_sigma_px, c.camera.fx, c.camera.fy,
+          1.0 / (c.depth.units_per_m * std::sqrt(12.0))};
 }
 
 inline double keypoint_sigma_px(int level, const SensorNoise& noise) {
   return noise.pixel_sigma_px * std::pow(noise.level_scale, std::max(0, level));
 }
 
-// depth_gradient: dZ/du, dZ/dv in metres per pixel at the keypoint.
-inline PointNoise physical_point_noise(const Eigen::Vector3d& p, int level, const Eigen::Vector2d& depth_gradient,
-                                       const SensorNoise& noise) {
+// depth_gradient: dZ/du, dZ/dv in metres per pixel at the keypoint; sigma_px: the keypoint's
+// localisation error at level-0 pixels.
+inline PointNoise physical_point_noise_px(const Eigen::Vector3d& p, double sigma_px,
+                                          const Eigen::Vector2d& depth_gradient, const SensorNoise& noise) {
   const double z = p.z();
-  const double sp = keypoint_sigma_px(level, noise);
+  const double sp = sigma_px;
   const double axial = noise.depth_noise_coeff * z * z;
+  const double rounding = noise.depth_rounding_sigma_m;
   const double slope2 = depth_gradient.squaredNorm();
   const double sl = noise.depth_lateral_sigma_px;
   PointNoise n;
   n.lateral = {sp * z / noise.fx, sp * z / noise.fy};
-  n.ray = std::sqrt(axial * axial + slope2 * (sp * sp + sl * sl)) * (p / z);
+  n.ray = std::sqrt(axial * axial + rounding * rounding + slope2 * (sp * sp + sl * sl)) * (p / z);
   return n;
 }
 
-// The 3x3 covariance of a point for the final fit's weights (no slope term: the fit's weights
-// see the point only).
+inline PointNoise physical_point_noise(const Eigen::Vector3d& p, int level, const Eigen::Vector2d& depth_gradient,
+                                       const SensorNoise& noise) {
+  return physical_point_noise_px(p, keypoint_sigma_px(level, noise), depth_gradient, noise);
+}
+
+// The model RANSAC's final fit weighs each point by: the sensor's constants as learnt so far
+// (each level's keypoint localisation, pipeline/keypoint_sigma.hpp; the depth noise
+// coefficient, DepthNoiseEstimate), the keypoint's error across the ray and through the
+// depth's slope along it, without the depth map's lateral noise. Weights without the slope
+// term collapse as the depth noise goes to zero; the depth map's lateral noise in the weights
+// made the Kinect's pairs 1.5-4 % worse (fr1_xyz and its every-2nd/3rd-frame copies).
+inline SensorNoise fit_weight_noise(SensorNoise noise) {
+  noise.depth_lateral_sigma_px = 0;
+  return noise;
+}
+
+// The 3x3 covariance of a point seen alone (level 0, no slope term): the final fit's weights
+// where the caller gives none per point.
 inline Eigen::Matrix3d point_covariance(const Eigen::Vector3d& p, const SensorNoise& noise) {
   return physical_point_noise(p, 0, Eigen::Vector2d::Zero(), noise).covariance();
 }

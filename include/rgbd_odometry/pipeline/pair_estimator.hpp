@@ -13,6 +13,7 @@
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
+#include "rgbd_odometry/pipeline/keypoint_sigma.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/pipeline/latency_covariance.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
@@ -42,6 +43,15 @@ class PairEstimator {
   Status match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
                        double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_key, PairResult& r);
 
+  // The noise of point p, measured at `frame`'s keypoint: the covariance's model (its level's
+  // law, its depth slope; no timing term), and the covariance RANSAC's final fit weighs it by
+  // (its level's learnt localisation, fit_weight_noise).
+  PointNoise keypoint_noise(const ProcessedFrame& frame, size_t keypoint, const Eigen::Vector3d& p) const;
+  Eigen::Matrix3d fit_covariance(const ProcessedFrame& frame, size_t keypoint, const Eigen::Vector3d& p) const;
+  // Each point pair's covariances (pair_covariances_) for RANSAC's final fit.
+  void describe_pair_noise(const ProcessedFrame& prev, const ProcessedFrame& curr);
+  // The keypoints' localisation learnt from fit_'s inliers' reprojection residuals.
+  void learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr);
   // The noise and image cell of each inlier (inlier_prev_noise_, inlier_curr_noise_,
   // inlier_cells_) for the covariance.
   void describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s);
@@ -54,6 +64,7 @@ class PairEstimator {
   Config config_;
   bool paper_noise_;  // covariance.model "paper", decided once
   SensorNoise noise_;
+  SensorNoise fit_noise_;  // the final fit's weights (fit_weight_noise)
   SymmetricMatcher matcher_;
   RigidRansac ransac_;
   PerturbationCovariance covariance_;
@@ -62,9 +73,11 @@ class PairEstimator {
   AlignmentTrust alignment_trust_;
   DepthLagEstimate depth_lag_;
   DepthNoiseEstimate depth_noise_;
+  KeypointSigmaEstimate keypoint_sigma_;
   std::vector<Match> matches_;
   std::vector<Eigen::Vector2d> predicted_;  // previous keypoints' positions in the current frame
   PointPairs pairs_;
+  PointPairCovariances pair_covariances_;  // of pairs_, the physical model's (empty for the paper's)
   RansacResult fit_, refined_;
   std::vector<Eigen::Vector3d> inlier_prev_, inlier_curr_;
   std::vector<PointNoise> inlier_prev_noise_, inlier_curr_noise_;

@@ -4,7 +4,10 @@
 // the best is then refined as PCL's refineModel does: fit all inliers by least squares,
 // shrink the threshold to min(3 sigma_inliers, lambda_inlier), re-select, until stable.
 // The final fit minimises the Mahalanobis residual under the ray-aligned sensor noise
-// (noise_model.hpp): depth errors along the viewing ray are cheap, lateral ones are not.
+// (noise_model.hpp): depth errors along the viewing ray are cheap, lateral ones are not. Its
+// weights are each point's own covariance where the caller gives them (the depth's slope at
+// the keypoint and the keypoint's level in), so that they stay finite and right when the
+// sensor's depth noise is near zero.
 //
 // Allocation-free: every buffer is sized at construction for `capacity` correspondences
 // (more only on the first larger input), the caller's RansacResult keeps its inlier buffer
@@ -30,13 +33,19 @@ struct RansacResult {
   int hypotheses = 0;        // non-degenerate samples scored
 };
 
+// Each point pair's two 3x3 covariances (noise_model.hpp), in the pairs' order.
+struct PointPairCovariances {
+  std::vector<Eigen::Matrix3d> prev, curr;
+};
+
 class RigidRansac {
  public:
   RigidRansac(const RansacConfig& ransac, const SensorNoise& noise, int capacity);
 
-  // prev[k] ~ T * curr[k] for inliers k. `out` is overwritten.
+  // prev[k] ~ T * curr[k] for inliers k. `out` is overwritten. Without `covariances` the
+  // final fit weighs each point by point_covariance().
   void estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, Rng& rng,
-                RansacResult& out);
+                RansacResult& out, const PointPairCovariances* covariances = nullptr);
 
   // The hypothesis stage alone: best motion of up to max_iterations non-degenerate samples;
   // returns how many were scored (0: every draw was degenerate).
@@ -45,7 +54,7 @@ class RigidRansac {
 
   // The refinement alone, from a given motion (used again after the points were corrected).
   void refine(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-              const Eigen::Isometry3d& initial, RansacResult& out);
+              const Eigen::Isometry3d& initial, RansacResult& out, const PointPairCovariances* covariances = nullptr);
 
  private:
   void load(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr);  // into the SoA
@@ -55,7 +64,8 @@ class RigidRansac {
                       const Eigen::Isometry3d& T, double threshold, std::vector<int>& out) const;
   // Gauss-Newton on sum_k r_k^T (C_prev + R C_curr R^T)^-1 r_k over the inliers, from T.
   Eigen::Isometry3d fit_anisotropic(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                                    const std::vector<int>& inliers, Eigen::Isometry3d T) const;
+                                    const std::vector<int>& inliers, const PointPairCovariances* covariances,
+                                    Eigen::Isometry3d T) const;
   RansacConfig config_;
   SensorNoise noise_;
   simd::ScoreRigidFn score_;

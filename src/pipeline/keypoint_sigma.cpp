@@ -1,0 +1,53 @@
+#include "rgbd_odometry/pipeline/keypoint_sigma.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rgbdo {
+
+namespace {
+// The median of a Rayleigh distribution of scale s is s sqrt(2 ln 2); the scale of the
+// difference of two keypoints' errors is sqrt(2) sigma.
+const double kMedianPerSigma = std::sqrt(2.0 * std::log(2.0)) * std::sqrt(2.0);
+}  // namespace
+
+KeypointSigmaEstimate::KeypointSigmaEstimate(double pixel_sigma_px, double level_scale, int levels, int capacity)
+    : levels_(std::clamp(levels, 1, kMaxLevels)) {
+  for (int l = 0; l < levels_; ++l) {
+    sigma_[static_cast<size_t>(l)] = std::clamp(pixel_sigma_px * std::pow(level_scale, l), kMinSigma_px, kMaxSigma_px);
+    residuals_[static_cast<size_t>(l)].reserve(static_cast<size_t>(std::max(capacity, 0)));
+  }
+}
+
+void KeypointSigmaEstimate::add(int level, double residual_px) {
+  if (level < 0 || level >= levels_ || !std::isfinite(residual_px)) return;
+  auto& r = residuals_[static_cast<size_t>(level)];
+  if (r.size() < r.capacity()) r.push_back(static_cast<float>(residual_px));
+}
+
+void KeypointSigmaEstimate::update() {
+  for (int l = 0; l < levels_; ++l) {
+    auto& r = residuals_[static_cast<size_t>(l)];
+    if (static_cast<int>(r.size()) >= kMinResiduals) {
+      const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+      std::nth_element(r.begin(), mid, r.end());
+      double& s = sigma_[static_cast<size_t>(l)];
+      const double reading = static_cast<double>(*mid) / kMedianPerSigma;
+      // The first readings are averaged with the prior (counted as one); then each moves the
+      // estimate by kRate of the difference (a reading from a few dozen residuals is noisy by
+      // ~10 %), at most kRate of itself.
+      int& n = readings_[static_cast<size_t>(l)];
+      n = std::min(n + 1, kAveragedReadings);
+      const double step =
+          n < kAveragedReadings ? (reading - s) / (n + 1) : std::clamp(kRate * (reading - s), -kRate * s, kRate * s);
+      s = std::clamp(s + step, kMinSigma_px, kMaxSigma_px);
+    }
+    r.clear();
+  }
+}
+
+double KeypointSigmaEstimate::sigma_px(int level) const {
+  return sigma_[static_cast<size_t>(std::clamp(level, 0, levels_ - 1))];
+}
+
+}  // namespace rgbdo
