@@ -158,7 +158,8 @@ PointNoise PairEstimator::keypoint_noise(const ProcessedFrame& frame, size_t key
 Eigen::Matrix3d PairEstimator::fit_covariance(const ProcessedFrame& frame, size_t keypoint,
                                               const Eigen::Vector3d& p) const {
   const int level = std::clamp(frame.features.keypoints[keypoint].octave, 0, config_.features.orb_levels - 1);
-  return physical_point_noise_px(p, keypoint_sigma_.sigma_px(level), frame.geometry.depth_gradient[keypoint], fit_noise_)
+  return physical_point_noise_px(p, fit_sigma_px_[static_cast<size_t>(level)], frame.geometry.depth_gradient[keypoint],
+                                 fit_noise_)
       .covariance();
 }
 
@@ -166,7 +167,10 @@ void PairEstimator::describe_pair_noise(const ProcessedFrame& prev, const Proces
   pair_covariances_.prev.clear();
   pair_covariances_.curr.clear();
   if (paper_noise_) return;  // the paper's fit: point_covariance()
-  fit_noise_.depth_noise_coeff = depth_noise_.coeff();  // the depth noise as learnt so far
+  // The constants as learnt so far.
+  fit_noise_.depth_noise_coeff = in_weight_steps(depth_noise_.coeff());
+  for (int l = 0; l < keypoint_sigma_.levels(); ++l)
+    fit_sigma_px_[static_cast<size_t>(l)] = in_weight_steps(keypoint_sigma_.sigma_px(l));
   for (size_t k = 0; k < pairs_.size(); ++k) {
     const Match& m = matches_[static_cast<size_t>(pairs_.match_index[k])];
     pair_covariances_.prev.push_back(fit_covariance(prev, static_cast<size_t>(m.prev), pairs_.prev[k]));

@@ -5,6 +5,7 @@
 // the matching window and colour/depth timing compensation of the next, and the start of the
 // change of rate its latency terms see.
 #include <cstdint>
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -65,6 +66,7 @@ class PairEstimator {
   bool paper_noise_;  // covariance.model "paper", decided once
   SensorNoise noise_;
   SensorNoise fit_noise_;  // the final fit's weights (fit_weight_noise)
+  std::array<double, KeypointSigmaEstimate::kMaxLevels> fit_sigma_px_{};  // each level's, in_weight_steps
   SymmetricMatcher matcher_;
   RigidRansac ransac_;
   PerturbationCovariance covariance_;
