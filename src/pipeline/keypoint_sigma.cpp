@@ -33,9 +33,7 @@ void KeypointSigmaEstimate::update() {
       std::nth_element(r.begin(), mid, r.end());
       double& s = sigma_[static_cast<size_t>(l)];
       const double reading = static_cast<double>(*mid) / kMedianPerSigma;
-      // The first readings are averaged with the prior (counted as one); then each moves the
-      // estimate by kRate of the difference (a reading from a few dozen residuals is noisy by
-      // ~10 %), at most kRate of itself.
+      // Averaged with the prior at first, then smoothed at kRate (keypoint_sigma.hpp).
       int& n = readings_[static_cast<size_t>(l)];
       n = std::min(n + 1, kAveragedReadings);
       const double step =

@@ -150,17 +150,18 @@ Status PairEstimator::match_and_fit(const ProcessedFrame& prev, const ProcessedF
 }
 
 // Detectors other than ORB's pyramid number their octaves otherwise: kept within ORB's levels.
+int PairEstimator::keypoint_level(const ProcessedFrame& frame, size_t keypoint) const {
+  return std::clamp(frame.features.keypoints[keypoint].octave, 0, config_.features.orb_levels - 1);
+}
+
 PointNoise PairEstimator::keypoint_noise(const ProcessedFrame& frame, size_t keypoint, const Eigen::Vector3d& p) const {
-  const int level = std::clamp(frame.features.keypoints[keypoint].octave, 0, config_.features.orb_levels - 1);
-  return physical_point_noise(p, level, frame.geometry.depth_gradient[keypoint], noise_);
+  return physical_point_noise(p, keypoint_level(frame, keypoint), frame.geometry.depth_gradient[keypoint], noise_);
 }
 
 Eigen::Matrix3d PairEstimator::fit_covariance(const ProcessedFrame& frame, size_t keypoint,
                                               const Eigen::Vector3d& p) const {
-  const int level = std::clamp(frame.features.keypoints[keypoint].octave, 0, config_.features.orb_levels - 1);
-  return physical_point_noise_px(p, fit_sigma_px_[static_cast<size_t>(level)], frame.geometry.depth_gradient[keypoint],
-                                 fit_noise_)
-      .covariance();
+  const double sigma_px = fit_sigma_px_[static_cast<size_t>(keypoint_level(frame, keypoint))];
+  return physical_point_noise_px(p, sigma_px, frame.geometry.depth_gradient[keypoint], fit_noise_).covariance();
 }
 
 void PairEstimator::describe_pair_noise(const ProcessedFrame& prev, const ProcessedFrame& curr) {

@@ -13,12 +13,12 @@
 // rendered ICL-NUIM images: 0.32, 0.34, 0.39, 0.40, 0.40, 0.54, 0.66, 0.51 px.
 //
 // Each level starts at the law (covariance.pixel_sigma_px x features.orb_scale_factor^level);
-// a pair with at least kMinResiduals residuals at a level gives a reading. The first readings
-// are averaged with the prior (the Kinect's fine levels are at twice the law: at 10 % a pair
-// the estimate would take 8 pairs to get there, and the warm-up's 1-s drift on the bundled
-// frames grew from 0.47 to 0.65 deg/s), then each moves the estimate by at most kRate of itself.
-// It stays within [kMinSigma_px, kMaxSigma_px]. Allocation-free after
-// construction.
+// a pair with at least kMinResiduals residuals at a level gives a reading. The first
+// kAveragedReadings readings are averaged with the prior (counted as one): the Kinect's fine
+// levels are at twice the law, which 10 % a pair would take 8 pairs to reach. After them each
+// reading moves the estimate by kRate of the difference (a reading from a few dozen residuals
+// is noisy by ~10 %), at most kRate of itself. It stays within [kMinSigma_px, kMaxSigma_px].
+// Allocation-free after construction.
 #include <array>
 #include <vector>
 

@@ -4,8 +4,8 @@
 // buffers sized once (no allocation per pair) and the last pair's rate: the motion prior for
 // the matching window and colour/depth timing compensation of the next, and the start of the
 // change of rate its latency terms see.
-#include <cstdint>
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -44,6 +44,8 @@ class PairEstimator {
   Status match_and_fit(const ProcessedFrame& prev, const ProcessedFrame& curr, const MotionPrior* window_prior,
                        double dt_s, const MotionPrior* timing_prior, std::uint64_t pair_key, PairResult& r);
 
+  // `frame`'s keypoint's pyramid level, within ORB's levels.
+  int keypoint_level(const ProcessedFrame& frame, size_t keypoint) const;
   // The noise of point p, measured at `frame`'s keypoint: the covariance's model (its level's
   // law, its depth slope; no timing term), and the covariance RANSAC's final fit weighs it by
   // (its level's learnt localisation, fit_weight_noise).
