@@ -16,6 +16,8 @@ constexpr double kSuccessProbability = 0.999;  // adaptive stop once a clean sam
 constexpr double kMinSampleSide_m = 0.02;      // shorter triangle sides barely constrain rotation
 constexpr double kMinSampleSine = 0.1;         // ~6 degrees: flatter triangles are near-collinear
 constexpr double kMaxRefinementRotation_rad = 0.05;
+// sqrt of chi^2(3)'s 99 % point: a Gaussian point pair is weighed in full 99 times in 100.
+constexpr double kHuberMahalanobis = 3.368;
 
 }  // namespace
 
@@ -65,7 +67,14 @@ Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d
       const Eigen::Matrix3d C = own ? Eigen::Matrix3d(covariances->prev[i] + T.linear() * covariances->curr[i] * T.linear().transpose())
                                     : Eigen::Matrix3d(point_covariance(p, noise_) +
                                                       T.linear() * point_covariance(curr[i], noise_) * T.linear().transpose());
-      const Eigen::Matrix3d W = C.inverse();
+      Eigen::Matrix3d W = C.inverse();
+      if (own) {
+        // Huber on the Mahalanobis distance: a point the model calls exact but whose residual
+        // says otherwise (a corner's depth, the one bad match the threshold let in) pulls
+        // with a bounded force instead of dominating the fit.
+        const double distance = std::sqrt(r.dot(W * r));
+        if (distance > kHuberMahalanobis) W *= kHuberMahalanobis / distance;
+      }
       // r(delta) = p - exp(delta) y ~ r - dt + [y]x dw  =>  J = [-I, [y]x]
       Eigen::Matrix<double, 3, 6> J;
       J.leftCols<3>() = -Eigen::Matrix3d::Identity();
