@@ -67,6 +67,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--evaluation", options.evaluation_path,
                  "write the per-pair evaluation against ground truth (errors, sigmas, NEES) as CSV here, for plots");
+  app.add_option("--calibrate", options.calibration_path,
+                 "measure the sensor's constants against the recording's ground truth (latencies, depth noise) and "
+                 "write them with the whole configuration to this YAML file, for --config");
   app.add_option("--max-frames", options.max_frames, "stop after this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_flag("--start-at-groundtruth", options.start_at_groundtruth,
                "start the trajectory at the first frame's ground-truth pose");

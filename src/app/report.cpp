@@ -38,7 +38,8 @@ void print_time_offset(std::ostream& out, const char* part, const TimeOffsetFit&
     out << "no best offset within +-" << o.max_offset_s * 1e3 << " ms (" << o.pairs << " pairs)\n";
     return;
   }
-  out << "best with the frames taken " << o.offset_s * 1e3 << " ms before their stamps (" << o.pairs
+  out << "best with the frames taken " << o.offset_s * 1e3 << " +- " << o.standard_error_s * 1e3
+      << " ms before their stamps (" << o.pairs
       << " pairs; RMSE " << std::setprecision(3) << o.rmse_at_stamps * factor << " " << unit << " at the stamps, "
       << o.rmse_at_offset * factor << " at the offset)\n";
 }

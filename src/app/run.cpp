@@ -2,10 +2,12 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <ostream>
 #include <vector>
 
+#include "rgbd_odometry/app/calibration.hpp"
 #include "rgbd_odometry/app/odometry_sinks.hpp"
 #include "rgbd_odometry/app/process_resources.hpp"
 #include "rgbd_odometry/app/report.hpp"
@@ -104,6 +106,17 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     origin = *gt;
   }
 
+  if (!options.calibration_path.empty() && groundtruth.empty()) {
+    err << "rgbd-odometry: --calibrate needs a recording with ground truth (a TUM directory with "
+           "groundtruth.txt); " << feed->description() << " has none\n";
+    return 2;
+  }
+  if (!options.calibration_path.empty() && !std::ofstream(options.calibration_path, std::ios::app)) {
+    // Found out now, not after the run it would take to measure.
+    err << "rgbd-odometry: cannot write the calibration to " << options.calibration_path << "\n";
+    return 1;
+  }
+
   TrajectoryIntegrator integrator(origin);
   GroundTruthAllowance allowance;
   try {
@@ -195,6 +208,17 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), tallies, run);
+  if (!options.calibration_path.empty()) {
+    const Calibration calibration = calibrate(config, evaluator.summary(), tallies.sensor);
+    std::ofstream file(options.calibration_path);
+    file << calibration_yaml(calibration);
+    file.close();
+    if (!file) {
+      err << "rgbd-odometry: cannot write the calibration to " << options.calibration_path << "\n";
+      return 1;
+    }
+    out << "  calibration written to " << options.calibration_path << ":\n" << calibration.notes;
+  }
   if (const std::string sampled = resources.summary(); !sampled.empty()) out << "  resources, memory the least over " << ResourceSampler::kWindowFrames << " frames: " << sampled << "\n";
   if (flight) {
     const LinkStats st = flight->stats();

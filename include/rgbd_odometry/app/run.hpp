@@ -22,6 +22,9 @@ struct RunOptions {
   // ("auto": estimated from it; "none"; "T_M,R_RAD") and a per-pair CSV for plots (empty: none).
   std::string groundtruth_allowance = "auto";
   std::string evaluation_path;
+  // --calibrate: the sensor's constants measured against the ground truth, written here as a
+  // configuration file (app/calibration.hpp); empty: none. A source without ground truth is refused.
+  std::string calibration_path;
 };
 
 // Returns the process exit code: 0 ok, 1 input/output failure, 2 bad configuration.

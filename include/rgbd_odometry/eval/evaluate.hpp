@@ -54,6 +54,9 @@ struct TimeOffsetFit {
   int pairs = 0;               // pairs whose ground truth covers every offset tried
   double rmse_at_stamps = 0;   // of the fitted part (rad or m) over those pairs
   double rmse_at_offset = 0;
+  // Of offset_s, as a least-squares fit of one parameter over independent pairs would have it
+  // (the cost's curvature at the minimum against its level); 0 when not found.
+  double standard_error_s = 0;
 };
 
 struct AccuracySummary {
