@@ -257,11 +257,14 @@ TimeOffsetFit AccuracyEvaluator::fit_time_offset(const std::vector<const Step*>&
   fit.found = true;
   fit.offset_s = offset_ns * 1e-9;
   fit.rmse_at_offset = std::sqrt(mean_square(std::llround(offset_ns)));
-  // Least squares in one parameter: the cost's curvature over the residual variance is the
-  // information, cost'' = 2 sum(g^2) / n with g the part's rate of change with the offset.
+  // Least squares in one parameter: var = s^2 / sum |g|^2, g the part's rate of change with
+  // the offset, where cost'' = 2 sum |g|^2 / n and each of the part's components (3 of a
+  // rotation's angle, 1 of tz) has the variance s^2 = cost / components at the minimum.
   if (curvature > 0) {
     const double step_s = static_cast<double>(kTimeOffsetStepNs) * 1e-9;
-    fit.standard_error_s = std::sqrt(2 * b * step_s * step_s / (static_cast<double>(pairs.size()) * curvature));
+    const double components = part == OffsetFitPart::Rotation ? 3.0 : 1.0;
+    fit.standard_error_s =
+        std::sqrt(2 * b * step_s * step_s / (components * static_cast<double>(pairs.size()) * curvature));
   }
   return fit;
 }
