@@ -68,19 +68,25 @@ Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d
                                     : Eigen::Matrix3d(point_covariance(p, noise_) +
                                                       T.linear() * point_covariance(curr[i], noise_) * T.linear().transpose());
       Eigen::Matrix3d W = C.inverse();
+      Eigen::Vector3d Wr = W * r;
       if (own) {
         // Huber on the Mahalanobis distance: a point the model calls exact but whose residual
         // says otherwise (a corner's depth, the one bad match the threshold let in) pulls
-        // with a bounded force instead of dominating the fit.
-        const double distance = std::sqrt(r.dot(W * r));
-        if (distance > kHuberMahalanobis) W *= kHuberMahalanobis / distance;
+        // with a bounded force instead of dominating the fit. (Squared first: most points are
+        // within, and need no square root.)
+        const double distance2 = r.dot(Wr);
+        if (distance2 > kHuberMahalanobis * kHuberMahalanobis) {
+          const double down = kHuberMahalanobis / std::sqrt(distance2);
+          W *= down;
+          Wr *= down;
+        }
       }
       // r(delta) = p - exp(delta) y ~ r - dt + [y]x dw  =>  J = [-I, [y]x]
       Eigen::Matrix<double, 3, 6> J;
       J.leftCols<3>() = -Eigen::Matrix3d::Identity();
       J.rightCols<3>() = skew(y);
       H += J.transpose() * W * J;
-      g += J.transpose() * W * r;
+      g += J.transpose() * Wr;
     }
     const Vector6d delta = -H.ldlt().solve(g);
     if (!delta.allFinite()) break;
