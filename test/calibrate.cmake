@@ -43,4 +43,10 @@ execute_process(COMMAND ${emulator} ${EXE} --source tum:${bare} --config ${CONFI
 if(NOT rc EQUAL 2 OR NOT stderr MATCHES "--calibrate needs a recording with ground truth" OR EXISTS ${bare}.yaml)
   message(FATAL_ERROR "without ground truth: exit ${rc}, '${stderr}'")
 endif()
-message(STATUS "calibration: colour ${colour} s, depth ${depth} s; refused without ground truth")
+# An unwritable file: refused before the run, not after it.
+execute_process(COMMAND ${emulator} ${EXE} --source ${SOURCE} --config ${CONFIG} -q --calibrate ${bare}/missing/dir/c.yaml
+                OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr RESULT_VARIABLE rc)
+if(NOT rc EQUAL 1 OR NOT stderr MATCHES "cannot write the calibration to" OR stdout MATCHES "summary")
+  message(FATAL_ERROR "unwritable calibration file: exit ${rc}, '${stderr}', '${stdout}'")
+endif()
+message(STATUS "calibration: colour ${colour} s, depth ${depth} s; refused without ground truth or a writable file")
