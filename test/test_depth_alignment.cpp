@@ -200,21 +200,32 @@ TEST(DepthAlignment, ItsResidualsReadTheSensorsDepthNoiseLaw) {
   }
 }
 
-TEST(SensorEstimates, TheDepthNoiseMovesFromItsPriorByAtMostItsRateAndStaysInItsBounds) {
+TEST(SensorEstimates, TheDepthNoiseAveragesItsFirstReadingsThenMovesByAtMostItsRate) {
   DepthNoiseEstimate e(1.425e-3);
-  // GIVEN the Kinect's prior, a sensor whose pairs read exact depth
-  e.update(0);
-  EXPECT_NEAR(e.coeff(), 0.9 * 1.425e-3, 1e-12);  // a tenth of itself per pair at most
-  for (int i = 0; i < 60; ++i) e.update(5e-5);
-  EXPECT_NEAR(e.coeff(), 5e-5, 1e-9);  // reaches the reading, not past it
-  // AND readings that say nothing are ignored; a wild one moves it a tenth
+  // GIVEN the Kinect's prior, a sensor whose pairs read 5e-5 (ICL-NUIM's rendered depth)
+  e.update(5e-5);
+  EXPECT_NEAR(e.coeff(), std::sqrt(1.425e-3 * 5e-5), 1e-12);  // the geometric mean with the prior
+  // AND readings that say nothing are ignored, not counted
   e.update(std::nan(""));
   e.update(-1);
-  EXPECT_NEAR(e.coeff(), 5e-5, 1e-9);
+  EXPECT_NEAR(e.coeff(), std::sqrt(1.425e-3 * 5e-5), 1e-12);
+  for (int i = 1; i < 10; ++i) e.update(5e-5);
+  // THEN after ten readings the prior weighs one in eleven: within 34 % of the reading, not 24x off
+  EXPECT_NEAR(e.coeff(), std::pow(1.425e-3, 1.0 / 11) * std::pow(5e-5, 10.0 / 11), 1e-12);
+  // AND afterwards a wild reading moves it a tenth of itself
+  const double settled = e.coeff();
   e.update(1.0);
-  EXPECT_NEAR(e.coeff(), 5.5e-5, 1e-9);
+  EXPECT_NEAR(e.coeff(), 1.1 * settled, 1e-12);
+  for (int i = 0; i < 60; ++i) e.update(5e-5);
+  EXPECT_NEAR(e.coeff(), 5e-5, 1e-9);  // reaches the reading, not past it
   for (int i = 0; i < 200; ++i) e.update(0);
   EXPECT_DOUBLE_EQ(e.coeff(), 1e-5);  // its floor: never zero, so no weight is infinite
+}
+
+TEST(SensorEstimates, AnExactFirstReadingIsTakenAtTheDepthNoisesFloor) {
+  DepthNoiseEstimate e(1.425e-3);
+  e.update(0);
+  EXPECT_NEAR(e.coeff(), std::sqrt(1.425e-3 * 1e-5), 1e-12);
 }
 
 TEST(DepthAlignment, AFlatWallLeavesItsSlidingDirectionsToTheFeatures) {

@@ -57,19 +57,19 @@ TEST(EndToEnd, EveryPairSucceedsWithASaneCovariance) {
 }
 
 TEST(EndToEnd, AccuracyHoldsItsMeasuredLevel) {
-  // Measured on these 40 frames: 4.64 mm / 0.317 deg frame to frame, 0.014 m/s / 0.675 deg/s
+  // Measured on these 40 frames: 4.64 mm / 0.317 deg frame to frame, 0.014 m/s / 0.698 deg/s
   // over 1 s (the paper reproduction: 10.6 mm / 0.44 deg on the full sequence). Bounds ~5 %
   // above, room for float and library-version differences, not for a worse pipeline. (The
   // final fit's Huber weights moved them from 4.57 mm / 0.312 deg, 0.014 m/s / 0.617 deg/s:
   // over the 9 one-second windows of these frames; on all 240 frames of fr1_xyz 0.879 ->
   // 0.892 deg/s and 4.72 -> 4.68 mm, on its every-3rd-frame copy 0.773 -> 0.727 deg/s,
-  // src/pipeline/README.md.)
+  // src/pipeline/README.md; the depth noise's geometric warm-up then 0.675 -> 0.698 deg/s.)
   const auto& s = default_replay().summary;
   EXPECT_EQ(s.evaluated, 39);
   EXPECT_LT(s.rpe_translation_m.rmse, 0.0049);
   EXPECT_LT(s.rpe_rotation_deg.rmse, 0.333);
   EXPECT_LT(s.drift_translation_mps.rmse, 0.015);
-  EXPECT_LT(s.drift_rotation_degps.rmse, 0.71);
+  EXPECT_LT(s.drift_rotation_degps.rmse, 0.73);
 }
 
 TEST(EndToEnd, CovarianceIsConsistentWithoutAFittedScale) {

@@ -24,6 +24,7 @@ constexpr double kLagMemoryPairs = 300;
 // DepthNoiseEstimate: at most this share of itself per pair (from the Kinect's prior to exact
 // depth's in ~30 pairs), and its bounds, /m.
 constexpr double kNoiseRate = 0.1, kNoiseMin = 1e-5, kNoiseMax = 1e-2;
+constexpr int kNoiseAveragedReadings = 10;  // = 1 / kNoiseRate: where the two rules meet
 // The median of a chi^2(1) variable: a median of squared normal residuals over this is their variance.
 constexpr double kChi2Median1 = 0.4549;
 // Normals from the grid neighbours this many steps away: a longer baseline, less noise.
@@ -301,6 +302,13 @@ double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthClo
 
 void DepthNoiseEstimate::update(double pair_coeff) {
   if (!(pair_coeff >= 0) || !std::isfinite(pair_coeff)) return;
+  if (readings_ < kNoiseAveragedReadings) {
+    // The geometric mean of the prior (counted as one) and the readings so far.
+    ++readings_;
+    const double reading = std::clamp(pair_coeff, kNoiseMin, kNoiseMax);
+    c_ = std::clamp(c_ * std::pow(reading / c_, 1.0 / (readings_ + 1)), kNoiseMin, kNoiseMax);
+    return;
+  }
   const double step = std::clamp(pair_coeff - c_, -kNoiseRate * c_, kNoiseRate * c_);
   c_ = std::clamp(c_ + step, kNoiseMin, kNoiseMax);
 }

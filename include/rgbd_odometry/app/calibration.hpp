@@ -14,9 +14,8 @@
 //    covariance.depth_noise_coeff (the depth maps' noise) and refinement.sigma_scale_prior
 //    (the alignment's trust), so that the next run does not spend its first pairs learning
 //    them again.
-// Measured on ICL-NUIM kt3 (images 0-99): the shipped defaults give pair RPE 0.71 mm and a
-// covariance too large (NEES 3.44 without allowance); calibrated on images 0-49 and run on
-// 50-99, 0.067 mm and NEES 6.42 (src/pipeline/README.md).
+// Measured on ICL-NUIM kt3, calibrated on images 0-49 and run on 50-99: pair RPE 0.78 ->
+// 0.067 mm, pair NEES (no allowance) 3.81 -> 5.53 (src/pipeline/README.md).
 #include <string>
 
 #include "rgbd_odometry/core/config.hpp"

@@ -164,8 +164,10 @@ class DepthLagEstimate {
 
 // The sensor's depth noise coefficient c (sigma_Z = c Z^2), learnt online from the depth
 // alignment's residuals (DepthAlignment::depth_noise_coeff): started at the configured prior
-// (covariance.depth_noise_coeff, the Kinect's), moved towards each pair's reading by at most
-// kNoiseRate of itself, kept within [kNoiseMin, kNoiseMax] /m. The residuals of two
+// (covariance.depth_noise_coeff, the Kinect's); the first ten readings are averaged with it
+// geometrically (the prior counted as one: a sensor's c may lie a decade or two below the
+// Kinect's, ICL's 6e-5, which 10 % a pair took 30 pairs to reach), then each moves it by at
+// most kNoiseRate of itself; kept within [kNoiseMin, kNoiseMax] /m. The residuals of two
 // consecutive frames see the noise of both and any error the pair's depth maps do not share
 // (a structured-light sensor's distortion pattern moving with the camera): on such a sensor
 // it reads high, never low.
@@ -177,6 +179,7 @@ class DepthNoiseEstimate {
 
  private:
   double c_;
+  int readings_ = 0;
 };
 
 // Fuses a full estimate `a` of one motion with an estimate `b` of its components along the
