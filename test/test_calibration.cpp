@@ -75,14 +75,25 @@ TEST(Calibration, WhatWasNotMeasuredIsKeptAndSaid) {
   EXPECT_NE(c.notes.find("not learnt"), std::string::npos) << c.notes;
 }
 
+TEST(Calibration, AValueOutsideItsKeysRangeIsSaidAndTheKeyKept) {
+  // GIVEN a latency offset beyond the key's 1 s (only a broken clock gives one)
+  AccuracySummary s;
+  s.rotation_time_offset = offset(1.5, 0.001);
+  Config run;
+  run.covariance.colour_latency_sigma_s = 0.011;
+  const Calibration c = calibrate(run, s, SensorEstimates{});
+  EXPECT_EQ(c.config.covariance.colour_latency_sigma_s, 0.011);
+  EXPECT_NE(c.notes.find("covariance.colour_latency_sigma_s kept"), std::string::npos) << c.notes;
+}
+
 TEST(Calibration, TheFileReadsBackToTheCalibratedValues) {
   AccuracySummary s;
   s.rotation_time_offset = offset(-0.0005, 0.0003);
   s.depth_time_offset = offset(-0.0002, 0.0006);
   SensorEstimates learnt;
   learnt.depth_noise_coeff = 6e-5;
-  learnt.depth_sigma_scale_t = 0.5;  // below the key's range: taken at its floor
-  learnt.depth_sigma_scale_r = 1.0;
+  learnt.depth_sigma_scale_t = 0.5;
+  learnt.depth_sigma_scale_r = 1.0;  // the larger
   const Calibration c = calibrate(Config{}, s, learnt);
   const std::string path = ::testing::TempDir() + "rgbdo_calibration.yaml";
   std::ofstream(path) << calibration_yaml(c);

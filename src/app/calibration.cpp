@@ -10,11 +10,6 @@
 namespace rgbdo {
 namespace {
 
-// The configuration's own bounds for the keys set here (core/config.cpp's table).
-constexpr double kMaxLatency_s = 1.0;
-constexpr double kMinDepthNoise = 1e-9, kMaxDepthNoise = 1.0;
-constexpr double kMinSigmaScale = 1.0, kMaxSigmaScale = 1e6;
-
 // A latency known as `offset` +- `standard_error`: its mean square, what the covariance's
 // latency term takes as sigma^2 (the fit's uncertainty keeps a latency read as ~0 from being
 // taken as exactly 0).
@@ -26,41 +21,46 @@ Calibration calibrate(const Config& run_config, const AccuracySummary& summary, 
   Calibration c{run_config, {}, false};
   std::ostringstream notes;
   notes << std::setprecision(4);
+  // Through the configuration's own table, which checks each key's range: a value outside
+  // it is said and the key kept, so that the file always reads back.
+  const auto set = [&](const char* key, double value) {
+    try {
+      if (set_config_value(c.config, key, value)) c.changed = true;
+    } catch (const ConfigError& e) {
+      notes << "# " << key << " kept: " << e.what() << "\n";
+    }
+  };
   notes << "# Calibrated against ground truth (rgbd-odometry --calibrate) over " << summary.evaluated
         << " pairs.\n";
   const TimeOffsetFit& colour = summary.rotation_time_offset;
   const TimeOffsetFit& depth = summary.depth_time_offset;
   if (colour.found) {
-    c.config.covariance.colour_latency_sigma_s = std::min(rms_latency(colour.offset_s, colour.standard_error_s), kMaxLatency_s);
+    const double sigma = rms_latency(colour.offset_s, colour.standard_error_s);
     notes << "# colour: frames taken " << colour.offset_s * 1e3 << " +- " << colour.standard_error_s * 1e3
-          << " ms before their stamps (rotations over "
-          << colour.pairs << " pairs): covariance.colour_latency_sigma_s = "
-          << c.config.covariance.colour_latency_sigma_s << "\n";
-    c.changed = true;
+          << " ms before their stamps (rotations over " << colour.pairs
+          << " pairs): covariance.colour_latency_sigma_s = " << sigma << "\n";
+    set("covariance.colour_latency_sigma_s", sigma);
   } else {
     notes << "# colour latency: not found within +-" << colour.max_offset_s * 1e3
           << " ms (too few pairs, or too little rotation): covariance.colour_latency_sigma_s kept\n";
   }
   if (colour.found && depth.found) {
-    const double depth_se = std::hypot(depth.standard_error_s, colour.standard_error_s);
-    c.config.covariance.depth_latency_sigma_s =
-        std::min(rms_latency(depth.offset_s - colour.offset_s, depth_se), kMaxLatency_s);
+    const double sigma = rms_latency(depth.offset_s - colour.offset_s,
+                                     std::hypot(depth.standard_error_s, colour.standard_error_s));
     notes << "# depth: frames taken " << depth.offset_s * 1e3 << " +- " << depth.standard_error_s * 1e3
-          << " ms before their stamps (tz over " << depth.pairs
-          << " pairs): covariance.depth_latency_sigma_s = " << c.config.covariance.depth_latency_sigma_s << "\n";
-    c.changed = true;
+          << " ms before their stamps (tz over " << depth.pairs << " pairs): covariance.depth_latency_sigma_s = "
+          << sigma << "\n";
+    set("covariance.depth_latency_sigma_s", sigma);
   } else {
     notes << "# depth latency: not found: covariance.depth_latency_sigma_s kept\n";
   }
   if (learnt.depth_noise_coeff > 0) {
-    c.config.covariance.depth_noise_coeff = std::clamp(learnt.depth_noise_coeff, kMinDepthNoise, kMaxDepthNoise);
-    const double scale = std::max(learnt.depth_sigma_scale_t, learnt.depth_sigma_scale_r);
-    c.config.refinement.sigma_scale_prior = std::clamp(scale, kMinSigmaScale, kMaxSigmaScale);
     notes << "# learnt from the data: depth noise " << learnt.depth_noise_coeff
           << " Z^2 (covariance.depth_noise_coeff), the depth alignment's sigma scaled by "
           << learnt.depth_sigma_scale_t << " / " << learnt.depth_sigma_scale_r
           << " (refinement.sigma_scale_prior = the larger)\n";
-    c.changed = true;
+    set("covariance.depth_noise_coeff", learnt.depth_noise_coeff);
+    set("refinement.sigma_scale_prior", std::max(learnt.depth_sigma_scale_t, learnt.depth_sigma_scale_r));
   } else {
     notes << "# depth noise and alignment trust: not learnt (refinement off): kept\n";
   }

@@ -21,8 +21,8 @@ constexpr int kMinCells = 8;
 // change (a few pairs of a hand-held camera turning), and old pairs fade over this many.
 constexpr double kLagPriorWeight = 0.05;
 constexpr double kLagMemoryPairs = 300;
-// DepthNoiseEstimate: at most this share of itself per pair (from the Kinect's prior to exact
-// depth's in ~30 pairs), and its bounds, /m.
+// DepthNoiseEstimate: after its geometric start, at most this share of itself per pair, and
+// its bounds, /m.
 constexpr double kNoiseRate = 0.1, kNoiseMin = 1e-5, kNoiseMax = 1e-2;
 constexpr int kNoiseAveragedReadings = 10;  // = 1 / kNoiseRate: where the two rules meet
 // The median of a chi^2(1) variable: a median of squared normal residuals over this is their variance.
