@@ -49,7 +49,7 @@ TEST(KeypointSigma, FirstReadingsAreAveragedThenEachMovesItByAtMostItsRate) {
   for (int k = 0; k < 9; ++k) e.add(0, 3.0 * median_per_sigma);
   e.update();
   EXPECT_NEAR(e.sigma_px(0), 2.0, 1e-6);
-  for (int pair = 0; pair < 8; ++pair) {
+  for (int pair = 0; pair < 9; ++pair) {  // readings 2 ... 10
     for (int k = 0; k < 9; ++k) e.add(0, 2.0 * median_per_sigma);
     e.update();
   }

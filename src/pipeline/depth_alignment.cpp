@@ -21,10 +21,6 @@ constexpr int kMinCells = 8;
 // change (a few pairs of a hand-held camera turning), and old pairs fade over this many.
 constexpr double kLagPriorWeight = 0.05;
 constexpr double kLagMemoryPairs = 300;
-// DepthNoiseEstimate: after its geometric start, at most this share of itself per pair, and
-// its bounds, /m.
-constexpr double kNoiseRate = 0.1, kNoiseMin = 1e-5, kNoiseMax = 1e-2;
-constexpr int kNoiseAveragedReadings = 10;  // = 1 / kNoiseRate: where the two rules meet
 // The median of a chi^2(1) variable: a median of squared normal residuals over this is their variance.
 constexpr double kChi2Median1 = 0.4549;
 // Normals from the grid neighbours this many steps away: a longer baseline, less noise.
@@ -300,18 +296,13 @@ double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthClo
   return std::sqrt(std::max(static_cast<double>(*mid), 0.0) / kChi2Median1);
 }
 
-void DepthNoiseEstimate::update(double pair_coeff) {
-  if (!(pair_coeff >= 0) || !std::isfinite(pair_coeff)) return;
-  if (readings_ < kNoiseAveragedReadings) {
-    // The geometric mean of the prior (counted as one) and the readings so far.
-    ++readings_;
-    const double reading = std::clamp(pair_coeff, kNoiseMin, kNoiseMax);
-    c_ = std::clamp(c_ * std::pow(reading / c_, 1.0 / (readings_ + 1)), kNoiseMin, kNoiseMax);
-    return;
-  }
-  const double step = std::clamp(pair_coeff - c_, -kNoiseRate * c_, kNoiseRate * c_);
-  c_ = std::clamp(c_ + step, kNoiseMin, kNoiseMax);
-}
+DepthNoiseEstimate::DepthNoiseEstimate(double prior)
+    : c_(prior, {.averaged_readings = 10,  // = 1 / kNoiseRate: where the two rules meet
+                 .geometric = true,
+                 .gain = 1,
+                 .max_step = kNoiseRate,
+                 .min = kNoiseMin,
+                 .max = kNoiseMax}) {}
 
 AlignmentTrust::AlignmentTrust(const RefinementConfig& config)
     : k_t_(config.sigma_scale_prior),

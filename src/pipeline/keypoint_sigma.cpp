@@ -13,8 +13,15 @@ const double kMedianPerSigma = std::sqrt(2.0 * std::log(2.0)) * std::sqrt(2.0);
 
 KeypointSigmaEstimate::KeypointSigmaEstimate(double pixel_sigma_px, double level_scale, int levels, int capacity)
     : levels_(std::clamp(levels, 1, kMaxLevels)) {
+  const LearntConstantRule rule{.averaged_readings = 10,  // = 1 / kRate: where the two rules meet
+                                .geometric = false,
+                                .gain = kRate,
+                                .max_step = kRate,
+                                .min = kMinSigma_px,
+                                .max = kMaxSigma_px};
+  sigma_.reserve(static_cast<size_t>(levels_));
   for (int l = 0; l < levels_; ++l) {
-    sigma_[static_cast<size_t>(l)] = std::clamp(pixel_sigma_px * std::pow(level_scale, l), kMinSigma_px, kMaxSigma_px);
+    sigma_.emplace_back(pixel_sigma_px * std::pow(level_scale, l), rule);
     residuals_[static_cast<size_t>(l)].reserve(static_cast<size_t>(std::max(capacity, 0)));
   }
 }
@@ -31,21 +38,14 @@ void KeypointSigmaEstimate::update() {
     if (static_cast<int>(r.size()) >= kMinResiduals) {
       const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
       std::nth_element(r.begin(), mid, r.end());
-      double& s = sigma_[static_cast<size_t>(l)];
-      const double reading = static_cast<double>(*mid) / kMedianPerSigma;
-      // Averaged with the prior at first, then smoothed at kRate (keypoint_sigma.hpp).
-      int& n = readings_[static_cast<size_t>(l)];
-      n = std::min(n + 1, kAveragedReadings);
-      const double step =
-          n < kAveragedReadings ? (reading - s) / (n + 1) : std::clamp(kRate * (reading - s), -kRate * s, kRate * s);
-      s = std::clamp(s + step, kMinSigma_px, kMaxSigma_px);
+      sigma_[static_cast<size_t>(l)].add(static_cast<double>(*mid) / kMedianPerSigma);
     }
     r.clear();
   }
 }
 
 double KeypointSigmaEstimate::sigma_px(int level) const {
-  return sigma_[static_cast<size_t>(std::clamp(level, 0, levels_ - 1))];
+  return sigma_[static_cast<size_t>(std::clamp(level, 0, levels_ - 1))].value();
 }
 
 }  // namespace rgbdo

@@ -24,6 +24,7 @@
 
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/pipeline/learnt_constant.hpp"
 
 namespace rgbdo {
 
@@ -163,23 +164,23 @@ class DepthLagEstimate {
 };
 
 // The sensor's depth noise coefficient c (sigma_Z = c Z^2), learnt online from the depth
-// alignment's residuals (DepthAlignment::depth_noise_coeff): started at the configured prior
-// (covariance.depth_noise_coeff, the Kinect's); the first ten readings are averaged with it
-// geometrically (the prior counted as one: a sensor's c may lie a decade or two below the
-// Kinect's, ICL's 6e-5, which 10 % a pair took 30 pairs to reach), then each moves it by at
+// alignment's residuals (DepthAlignment::depth_noise_coeff) by learnt_constant.hpp's rule:
+// started at the configured prior (covariance.depth_noise_coeff, the Kinect's), the first ten
+// readings averaged with it geometrically (a sensor's c may lie a decade or two below the
+// Kinect's: ICL's 6e-5, which 10 % a pair took 30 pairs to reach), then each moving it by at
 // most kNoiseRate of itself; kept within [kNoiseMin, kNoiseMax] /m. The residuals of two
 // consecutive frames see the noise of both and any error the pair's depth maps do not share
 // (a structured-light sensor's distortion pattern moving with the camera): on such a sensor
 // it reads high, never low.
 class DepthNoiseEstimate {
  public:
-  explicit DepthNoiseEstimate(double prior) : c_(prior) {}
-  void update(double pair_coeff);
-  double coeff() const { return c_; }
+  static constexpr double kNoiseRate = 0.1, kNoiseMin = 1e-5, kNoiseMax = 1e-2;
+  explicit DepthNoiseEstimate(double prior);
+  void update(double pair_coeff) { c_.add(pair_coeff); }
+  double coeff() const { return c_.value(); }
 
  private:
-  double c_;
-  int readings_ = 0;
+  LearntConstant c_;
 };
 
 // Fuses a full estimate `a` of one motion with an estimate `b` of its components along the

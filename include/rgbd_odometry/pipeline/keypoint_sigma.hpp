@@ -13,14 +13,17 @@
 // rendered ICL-NUIM images: 0.32, 0.34, 0.39, 0.40, 0.40, 0.54, 0.66, 0.51 px.
 //
 // Each level starts at the law (covariance.pixel_sigma_px x features.orb_scale_factor^level);
-// a pair with at least kMinResiduals residuals at a level gives a reading. The first
-// kAveragedReadings readings are averaged with the prior (counted as one): the Kinect's fine
-// levels are at twice the law, which 10 % a pair would take 8 pairs to reach. After them each
-// reading moves the estimate by kRate of the difference (a reading from a few dozen residuals
-// is noisy by ~10 %), at most kRate of itself. It stays within [kMinSigma_px, kMaxSigma_px].
+// a pair with at least kMinResiduals residuals at a level gives a reading, taken in by
+// learnt_constant.hpp's rule: the first ten readings averaged with the prior (counted as one):
+// the Kinect's fine levels are at twice the law, which 10 % a pair would take 8 pairs to
+// reach. After them each reading moves the estimate by kRate of the difference (a reading from
+// a few dozen residuals is noisy by ~10 %), at most kRate of itself. It stays within
+// [kMinSigma_px, kMaxSigma_px].
 // Allocation-free after construction.
 #include <array>
 #include <vector>
+
+#include "rgbd_odometry/pipeline/learnt_constant.hpp"
 
 namespace rgbdo {
 
@@ -44,9 +47,7 @@ class KeypointSigmaEstimate {
 
  private:
   int levels_;
-  static constexpr int kAveragedReadings = 10;  // = 1 / kRate: where the two rules meet
-  std::array<double, kMaxLevels> sigma_{};
-  std::array<int, kMaxLevels> readings_{};
+  std::vector<LearntConstant> sigma_;  // one per level
   std::array<std::vector<float>, kMaxLevels> residuals_;
 };
 
