@@ -19,6 +19,7 @@
 
 namespace rgbdo {
 
+// Every user sets every field (designated initialisers); `geometric` needs min > 0.
 struct LearntConstantRule {
   int averaged_readings = 10;
   bool geometric = false;
