@@ -260,8 +260,8 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   }
   Matrix6d depth_cov = alignment_trust_.scaled(own_cov);
   depth_cov.bottomRightCorner<3, 3>() += depth_lag_.rotation_covariance();
-  // Learnt from every fully constrained pair of a moving camera before the agreement test,
-  // which must not censor it.
+  // Learnt from every fully constrained pair, at rest too (estimate() says why), before the
+  // agreement test, which must not censor it.
   if (alignment_.constrained == 6)
     alignment_trust_.update(difference, feature_cov, own_cov, depth_lag_.rotation_covariance());
   // A sensor whose alignment errs by several times what its residuals say has errors they
