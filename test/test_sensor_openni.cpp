@@ -11,12 +11,14 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <limits>
+#include <thread>
 #include <unistd.h>
 
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/sensor/sensor_openni.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/io/config_file.hpp"
+#include "recorded_frame_of.hpp"
 
 namespace rgbdo {
 namespace {
@@ -51,26 +53,11 @@ OpenNiOptions options_for(const std::string& uri) {
   return o;
 }
 
-// The recorded frame each live frame is: live times are the device's clock mapped onto the
-// host's (a constant offset here), so the intervals from the first live frame are the
-// recording's intervals from the frame it was. Empty when no such frame fits all of them.
+// The recorded frame of each live frame (test/recorded_frame_of.hpp).
 std::vector<size_t> recorded_index_of(const std::vector<RgbdFrame>& live, const TumSequence& seq) {
-  for (size_t first = 0; first < seq.frames.size(); ++first) {
-    std::vector<size_t> index;
-    size_t k = first;
-    for (const RgbdFrame& f : live) {
-      const std::int64_t since_first = f.t_colour_ns - live.front().t_colour_ns;
-      while (k < seq.frames.size() &&
-             seq.frames[k].t_colour_ns - seq.frames[first].t_colour_ns < since_first - 2000)  // 1 us device steps
-        ++k;
-      if (k == seq.frames.size() ||
-          std::llabs(seq.frames[k].t_colour_ns - seq.frames[first].t_colour_ns - since_first) > 2000)
-        break;
-      index.push_back(k);
-    }
-    if (index.size() == live.size()) return index;
-  }
-  return {};
+  std::vector<std::int64_t> times;
+  for (const RgbdFrame& f : live) times.push_back(f.t_colour_ns);
+  return recorded_frame_of(times, seq);
 }
 
 TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
@@ -205,6 +192,22 @@ TEST(OpenNiSource, DroppedFramesAreCountedFromFrameIndices) {
   const auto frames = capture(source, problem);
   // The three the sensor dropped, and any a reader woken late on a loaded machine missed.
   EXPECT_GE(source.dropped_colour_frames(), 3);
+  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+}
+
+TEST(OpenNiSource, FramesSentBeforeTheFirstReadAreCounted) {
+  // The streams start when the source opens; the first read comes ten frame periods later, as
+  // after a slow start-up. OpenNI2 keeps a stream's newest frame only: those before were
+  // replaced unread, and their indices (from 1) say how many.
+  OpenNiSource source(options_for(virtual_uri("&id=read-late")));
+  std::this_thread::sleep_for(std::chrono::duration<double>(10.0 / 30.0 / RGBDO_VIRTUAL_SENSOR_RATE));
+  std::string problem;
+  const auto frames = capture(source, problem);
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  const std::vector<size_t> recorded = recorded_index_of(frames, seq);
+  ASSERT_EQ(recorded.size(), frames.size()) << "live frames whose intervals match no run of recorded frames";
+  ASSERT_GE(recorded.front(), 1u) << "the first frame read was the recording's first: nothing was lost to count";
+  EXPECT_GE(static_cast<size_t>(source.dropped_colour_frames()), recorded.front());
   EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
 }
 

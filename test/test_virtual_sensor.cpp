@@ -109,19 +109,21 @@ TEST_F(VirtualSensor, OpensByUriAndListsItsModes) {
 TEST_F(VirtualSensor, DeliversTheRecordingAtItsTimesWithItsContent) {
   openni::Device device;
   ASSERT_EQ(device.open((kUri + "?" + kRateArg).c_str()), openni::STATUS_OK) << openni::OpenNI::getExtendedError();
-  const Capture c = capture(device, 39);
+  const Capture c = capture(device, 40);
   device.close();
-  // Every frame of the recording, in order, each with its index: a reader woken late on a
-  // loaded machine may miss some (OpenNI2 keeps a stream's newest frame only), which shows as
-  // a gap in the indices, never as a frame out of place. The last one is always there.
+  // Every frame of the recording, in order, each with its index, numbered from 1 as OpenNI2's
+  // drivers do (the reader counts a first index above 1 as frames it missed): a reader woken
+  // late on a loaded machine may miss some (OpenNI2 keeps a stream's newest frame only), which
+  // shows as a gap in the indices, never as a frame out of place. The last one is always there.
   ASSERT_GE(c.indices.size(), 2u);
-  EXPECT_EQ(c.indices.back(), 39);
+  EXPECT_GE(c.indices.front(), 1);
+  EXPECT_EQ(c.indices.back(), 40);
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
   for (size_t i = 0; i < c.indices.size(); ++i) {
     if (i > 0) {
       EXPECT_GT(c.indices[i], c.indices[i - 1]);
     }
-    const auto frame = static_cast<size_t>(c.indices[i]), first = static_cast<size_t>(c.indices[0]);
+    const auto frame = static_cast<size_t>(c.indices[i] - 1), first = static_cast<size_t>(c.indices[0] - 1);
     const auto expected_us = (seq.frames[frame].t_colour_ns - seq.frames[first].t_colour_ns) / 1000;
     // Device time is the recording's, from its first event (fr1: depth, 15 ms earlier).
     EXPECT_NEAR(static_cast<double>(c.timestamps_us[i] - c.timestamps_us[0]), static_cast<double>(expected_us), 1.0);
@@ -135,7 +137,7 @@ TEST_F(VirtualSensor, DeliversTheRecordingAtItsTimesWithItsContent) {
     early += c.arrival_s[i] < static_cast<double>(c.timestamps_us[i]) * 1e-6 / kRate - 0.001;
   EXPECT_EQ(early, 0) << "frames delivered before their recorded time";
   // Content: colour as recorded (RGB order), depth in 100 um units = TUM raw x 2.
-  cv::Mat expected_colour = cv::imread(seq.frames[static_cast<size_t>(c.indices[0])].colour_path, cv::IMREAD_COLOR);
+  cv::Mat expected_colour = cv::imread(seq.frames[static_cast<size_t>(c.indices[0] - 1)].colour_path, cv::IMREAD_COLOR);
   cv::cvtColor(expected_colour, expected_colour, cv::COLOR_BGR2RGB);
   EXPECT_EQ(cv::countNonZero(c.first_colour.reshape(1) != expected_colour.reshape(1)), 0);
   bool recorded_depth = false;
@@ -150,22 +152,23 @@ TEST_F(VirtualSensor, DeliversTheRecordingAtItsTimesWithItsContent) {
 TEST_F(VirtualSensor, InjectedDropAndStallAreVisibleToTheReader) {
   openni::Device device;
   ASSERT_EQ(device.open((kUri + "?" + kRateArg + "&drop=5&stall=10:400").c_str()), openni::STATUS_OK);
-  const Capture c = capture(device, 19);
+  const Capture c = capture(device, 20);
   device.close();
   ASSERT_GE(c.indices.size(), 2u);
-  // Frame 5 never arrives: the indices jump from 4 to 6 (a reader woken late under load may
-  // miss others too, never see one out of order).
-  EXPECT_EQ(std::count(c.indices.begin(), c.indices.end(), 5), 0);
-  EXPECT_EQ(std::count(c.indices.begin(), c.indices.end(), 6), 1);
+  // The recording's frame 5 (numbered 6) never arrives: the indices jump from 5 to 7 (a reader
+  // woken late under load may miss others too, never see one out of order).
+  EXPECT_EQ(std::count(c.indices.begin(), c.indices.end(), 6), 0);
+  EXPECT_EQ(std::count(c.indices.begin(), c.indices.end(), 7), 1);
   EXPECT_TRUE(std::is_sorted(c.indices.begin(), c.indices.end()));
   // Before frame 10 the device stalls 400 ms on top of the frame spacing: frame 10 cannot
   // arrive before its recorded time (scaled by the rate) plus the stall. A lower bound, because
   // a reader woken late on a loaded machine only ever sees a frame later (the gap to frame 9
   // is no measure then: frame 9 may have been read late too); 1 ms for the device clock's
   // microsecond steps. Without the stall, on an idle machine, it arrives ~0.4 s before the bound.
-  // (Frame 10, or the first one after it if a late reader missed it: all come after the stall.)
+  // (Frame 10, numbered 11, or the first one after it if a late reader missed it: all come
+  // after the stall.)
   const auto ten = static_cast<size_t>(
-      std::find_if(c.indices.begin(), c.indices.end(), [](int index) { return index >= 10; }) - c.indices.begin());
+      std::find_if(c.indices.begin(), c.indices.end(), [](int index) { return index >= 11; }) - c.indices.begin());
   ASSERT_LT(ten, c.indices.size());
   const double due_without_stall_s = static_cast<double>(c.timestamps_us[ten]) * 1e-6 / kRate;
   EXPECT_GT(c.arrival_s[ten], due_without_stall_s + 0.4 - 0.001);
@@ -183,10 +186,10 @@ TEST_F(VirtualSensor, InjectedDisconnectIsReportedAndStopsTheStreams) {
   const Capture c = capture(device, 39, [&] { return listener.calls.load() > 0; });
   device.close();
   openni::OpenNI::removeDeviceDisconnectedListener(&listener);
-  // Frames 0..7 and no more (a reader woken late under load may miss some, never a later one;
-  // the last before the unplug stays readable).
+  // Frames 0..7 (numbered 1..8) and no more (a reader woken late under load may miss some,
+  // never a later one; the last before the unplug stays readable).
   ASSERT_FALSE(c.indices.empty());
-  EXPECT_EQ(c.indices.back(), 7);
+  EXPECT_EQ(c.indices.back(), 8);
   EXPECT_TRUE(std::is_sorted(c.indices.begin(), c.indices.end()));
   EXPECT_EQ(listener.calls.load(), 1);
 }

@@ -50,6 +50,16 @@ openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int 
   throw SourceError(s.str());
 }
 
+// Colour frames a just-started live stream numbered before `first_index`, the first one read.
+// OpenNI2's drivers number a started stream's frames from 1, and a stream keeps only its newest
+// frame: those the device sent before the reader first looked (a slow start-up, a loaded
+// machine) were replaced unread, and are counted as the sensor's drops are. An index beyond ten
+// seconds of frames is a device that numbers otherwise (a counter that does not restart with
+// the stream): nothing is known of what it skipped, and nothing is counted.
+int frames_numbered_before(int first_index, int fps) {
+  return first_index > 1 && first_index <= 1 + 10 * fps ? first_index - 1 : 0;
+}
+
 }  // namespace
 
 struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
@@ -73,7 +83,7 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   int depth_count = 0;
   int last_colour_index = -1;
   // Read by other threads (the status line) while the capture thread counts: atomic.
-  std::atomic<int> dropped{0};   // colour frame indices the sensor skipped
+  std::atomic<int> dropped{0};   // colour frame indices the sensor skipped, or numbered before the first read
   std::atomic<int> replaced{0};  // colour frames given up: two newer ones came before their depth
   // A colour frame that arrived while the one before it waited for its depth: the next call's
   // frame (converted already).
@@ -304,6 +314,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
       }
       const int index = frame.getFrameIndex();
       if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
+      if (s.last_colour_index < 0 && !s.playback) s.dropped += frames_numbered_before(index, s.options.fps);
       s.last_colour_index = index;
       const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                         static_cast<size_t>(frame.getStrideInBytes()));

@@ -1,14 +1,16 @@
 // An OpenNI2 driver plugin that presents a recorded TUM RGB-D sequence as a live device:
 // a colour stream (RGB888) and a depth stream (DEPTH_100_UM, registered to colour, which is
 // how TUM recorded it), each frame delivered at its recorded time (scaled by `rate`), with
-// device timestamps in microseconds from the first frame and per-stream frame indices.
+// device timestamps in microseconds from the first frame and per-stream frame indices (from 1).
 // OpenNI2 loads it like any vendor driver, so code under test reads it exactly as it reads a
 // PrimeSense sensor.
 //
 // URI: rgbdo-virtual:<TUM directory>[?rate=R&drop=i,j&stall=i:ms&disconnect=i&reconnect=ms&loop=N]
 //   rate        playback speed (1 = recorded rate)
-//   drop        colour frame indices never delivered (their index is skipped, as a USB drop)
-//   stall       before colour frame i, both streams stop for `ms` milliseconds
+//   drop        colour frames (0-based, of the recording) never delivered (their index is
+//               skipped, as a USB drop)
+//   stall       before colour frame i (0-based, of the recording), both streams stop for
+//               `ms` milliseconds
 //   disconnect  at colour frame i the device reports itself disconnected and stops
 //   reconnect   `ms` after the disconnect the device is plugged back in: it can be opened
 //               again and plays on from the frames recorded by then (the scene went on
@@ -269,7 +271,11 @@ class VirtualDevice : public oni::driver::DeviceBase {
       return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     };
     double stalled_s = 0;
-    int colour_index = 0, depth_index = 0;
+    int colour_index = 0, depth_index = 0;  // in the recording: what drop, stall and disconnect name
+    // What the device numbers its frames, as OpenNI2's drivers do: from 1 for the first frame
+    // after the streams are opened (a re-plugged device starts again), a dropped frame's number
+    // left out.
+    int colour_numbered = 0, depth_numbered = 0;
     // Each pass of a looped recording follows the last one a frame period later, on one clock,
     // shifted by whole microseconds (the timestamps' unit): every pass has the same intervals.
     const std::int64_t pass_ns = (events.back().t_ns - t0_ns + 1'000'000'000 / kFps) / 1000 * 1000;
@@ -295,6 +301,7 @@ class VirtualDevice : public oni::driver::DeviceBase {
         // Re-plugged: what was recorded while the device was away is gone.
         if (resumed && due_s < std::chrono::duration<double>(opened - start).count()) continue;
         while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        const int frame_number = e.colour ? ++colour_numbered : ++depth_numbered;
         if (e.colour && options_.drop.count(index)) continue;
         // A frame of another size is dropped (the reader sees the gap in the indices), a huge
         // one from its PNG header, before it is decoded.
@@ -309,7 +316,7 @@ class VirtualDevice : public oni::driver::DeviceBase {
         }
         std::lock_guard<std::mutex> lock(mutex_);
         VirtualStream* s = e.colour ? colour_ : depth_;
-        if (s) s->deliver(image, timestamp_us, index);
+        if (s) s->deliver(image, timestamp_us, frame_number);
       }
     }
     // The last frames are out; a frame period later the recording's device leaves.
