@@ -54,9 +54,9 @@ openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int 
 // OpenNI2's drivers number a started stream's frames from 1 (its test and Oz drivers do, as
 // does the virtual sensor), and a stream keeps only its newest frame: those the device sent
 // before the reader first looked (a slow start-up, a loaded machine) were replaced unread, and
-// are counted as the sensor's drops are. An index beyond ten
-// seconds of frames is a device that numbers otherwise (a counter that does not restart with
-// the stream): nothing is known of what it skipped, and nothing is counted.
+// are counted as the sensor's drops are. An index beyond ten seconds of frames is a device that
+// numbers otherwise (a counter that does not restart with the stream): nothing is known of
+// what it skipped, and nothing is counted.
 int frames_numbered_before(int first_index, int fps) {
   return first_index > 1 && first_index <= 1 + 10 * fps ? first_index - 1 : 0;
 }
