@@ -51,12 +51,12 @@ openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int 
 }
 
 // Colour frames a just-started live stream numbered before `first_index`, the first one read.
-// OpenNI2's drivers number a started stream's frames from 1 (its test and Oz drivers do, as
-// does the virtual sensor), and a stream keeps only its newest frame: those the device sent
-// before the reader first looked (a slow start-up, a loaded machine) were replaced unread, and
-// are counted as the sensor's drops are. An index beyond ten seconds of frames is a device that
-// numbers otherwise (a counter that does not restart with the stream): nothing is known of
-// what it skipped, and nothing is counted.
+// OpenNI2's drivers number a created stream's frames from 1 (its PS1080 driver for the Xtion
+// and Carmine does, as do its test driver and the virtual sensor), and a stream keeps only its
+// newest frame: those the device sent before the reader first looked (a slow start-up, a
+// loaded machine) were replaced unread, and are counted as the sensor's drops are. An index
+// beyond ten seconds of frames is a device that numbers otherwise (a counter that does not
+// restart with the stream): nothing is known of what it skipped, and nothing is counted.
 int frames_numbered_before(int first_index, int fps) {
   return first_index > 1 && first_index <= 1 + 10 * fps ? first_index - 1 : 0;
 }
