@@ -2,13 +2,32 @@
 // compass hits (circle 0, 4, 8, 12) on either side hold no corner and are skipped (every arc
 // of 9 covers two adjacent compass points); in the others each lane counts its longest run
 // of brighter and of darker circle pixels, a corner being a run of 9 (the same booleans as the
-// reference's bit test).
+// reference's bit test). The score gathers one corner's circle into a vector by lane loads and
+// sums its saturated excesses: a third of the reference's instructions per corner.
 #include <arm_neon.h>
+
+#include <algorithm>
+#include <utility>
 
 #include "rgbd_odometry/simd/fast.hpp"
 
 namespace rgbdo::simd {
 namespace {
+
+// The sum of the 16 bytes (at most 16 x 255: no overflow in the widening adds).
+int sum_u8(uint8x16_t v) {
+  const uint64x2_t s = vpaddlq_u32(vpaddlq_u16(vpaddlq_u8(v)));
+  return static_cast<int>(vgetq_lane_u64(s, 0) + vgetq_lane_u64(s, 1));
+}
+
+// The 16 circle pixels in one vector (in circle order; the sums do not care), by lane loads:
+// a corner's circle spans 7 rows, and corners are sparse.
+template <int... K>
+uint8x16_t load_circle(const std::uint8_t* p, const std::ptrdiff_t* offsets, std::integer_sequence<int, K...>) {
+  uint8x16_t v = vdupq_n_u8(0);
+  ((v = vld1q_lane_u8(p + offsets[K], v, K)), ...);
+  return v;
+}
 
 bool all_zero(uint8x16_t v) {
   const uint32x2_t folded = vorr_u32(vget_low_u32(vreinterpretq_u32_u8(v)), vget_high_u32(vreinterpretq_u32_u8(v)));
@@ -56,6 +75,16 @@ void fast9_row_neon(const std::uint8_t* row, std::ptrdiff_t stride, int n, int t
     vst1q_u8(flags + i, vorrq_u8(vandq_u8(bright, one), vandq_u8(dark, two)));
   }
   if (i < n) fast9_row_scalar(row + i, stride, n - i, threshold, flags + i);
+}
+
+int fast9_score_neon(const std::uint8_t* p, const std::ptrdiff_t* offsets, int threshold, int flags) {
+  const uint8x16_t v = load_circle(p, offsets, std::make_integer_sequence<int, 16>{});
+  // Saturated as the row kernel's bounds are: above centre + threshold > 255 nothing is
+  // brighter, and below centre - threshold < 0 nothing darker, so clamping changes no excess.
+  const int hi = *p + threshold, lo = *p - threshold;
+  const int bright = (flags & 1) ? sum_u8(vqsubq_u8(v, vdupq_n_u8(static_cast<std::uint8_t>(std::min(hi, 255))))) : 0;
+  const int dark = (flags & 2) ? sum_u8(vqsubq_u8(vdupq_n_u8(static_cast<std::uint8_t>(std::max(lo, 0))), v)) : 0;
+  return std::max(bright, dark);
 }
 
 }  // namespace rgbdo::simd

@@ -1,6 +1,9 @@
-// Reference FAST-9 segment test (rgbd_odometry/simd/fast.hpp): per pixel, the 16 circle
-// comparisons as bit masks and an arc-of-9 test by doubling runs of ones.
+// Reference FAST-9 segment test and score (rgbd_odometry/simd/fast.hpp): per pixel, the 16
+// circle comparisons as bit masks and an arc-of-9 test by doubling runs of ones; the score as
+// two sums over the circle.
 #include "rgbd_odometry/simd/fast.hpp"
+
+#include <algorithm>
 
 namespace rgbdo::simd {
 namespace {
@@ -31,6 +34,17 @@ void fast9_row_scalar(const std::uint8_t* row, std::ptrdiff_t stride, int n, int
     }
     flags[i] = static_cast<std::uint8_t>((has_arc_of_9(bright) ? 1 : 0) | (has_arc_of_9(dark) ? 2 : 0));
   }
+}
+
+int fast9_score_scalar(const std::uint8_t* p, const std::ptrdiff_t* offsets, int threshold, int flags) {
+  const int hi = *p + threshold, lo = *p - threshold;
+  int excess_bright = 0, excess_dark = 0;
+  for (int k = 0; k < 16; ++k) {
+    const int v = p[offsets[k]];
+    excess_bright += std::max(v - hi, 0);
+    excess_dark += std::max(lo - v, 0);
+  }
+  return std::max((flags & 1) ? excess_bright : 0, (flags & 2) ? excess_dark : 0);
 }
 
 }  // namespace rgbdo::simd

@@ -97,6 +97,7 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
       width_(width),
       height_(height),
       fast9_row_(simd::active_kernels().fast9_row),
+      fast9_score_(simd::active_kernels().fast9_score),
       blend_rows_(simd::active_kernels().blend_rows),
       resample_row_(simd::active_kernels().resample_row),
       box5_row_(simd::active_kernels().box5_row),
@@ -217,7 +218,7 @@ void GridOrbExtractor::build_box_sums(Level& L) const {
 void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
   const int w = L.image.cols, h = L.image.rows;
   const auto stride = static_cast<int>(L.image.step);
-  std::array<int, 16> circle_offset{};  // FAST circle (radius 3) at this level's stride
+  std::array<std::ptrdiff_t, 16> circle_offset{};  // FAST circle (radius 3) at this level's stride
   for (int k = 0; k < 16; ++k) circle_offset[static_cast<size_t>(k)] = simd::kFastCircle[k][1] * stride + simd::kFastCircle[k][0];
   const int cells_x = (w - 2 * kBorder + L.cell_px - 1) / L.cell_px;
   const int cells_y = (h - 2 * kBorder + L.cell_px - 1) / L.cell_px;
@@ -247,16 +248,9 @@ void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
         const int x = x_begin + i;
         // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
         if (mask_row[L.mask_x[static_cast<size_t>(x)]] == 0) continue;
-        // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score).
-        const std::uint8_t* p = row + x;
-        const int hi = *p + t, lo = *p - t;
-        int excess_bright = 0, excess_dark = 0;
-        for (int k = 0; k < 16; ++k) {
-          const int v = p[circle_offset[static_cast<size_t>(k)]];
-          excess_bright += std::max(v - hi, 0);
-          excess_dark += std::max(lo - v, 0);
-        }
-        const int score = std::max((flags[i] & 1) ? excess_bright : 0, (flags[i] & 2) ? excess_dark : 0) + 1;
+        // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score),
+        // at least 1 for a corner.
+        const int score = fast9_score_(row + x, circle_offset.data(), t, flags[i]) + 1;
         // Bounded (sized at construction: no allocation); only noise fills it.
         if (candidates.size() == candidates.capacity()) return;
         candidates.push_back({x, y, score, strong});

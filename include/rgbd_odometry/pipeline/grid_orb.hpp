@@ -104,6 +104,7 @@ class GridOrbExtractor {
   std::vector<Level> levels_;
   // The active kernel set's, bound once.
   simd::Fast9RowFn fast9_row_;
+  simd::Fast9ScoreFn fast9_score_;
   simd::BlendRowsFn blend_rows_;
   simd::ResampleRowFn resample_row_;
   simd::Box5RowFn box5_row_;

@@ -28,6 +28,7 @@ using PerturbationSumsFn = void (*)(const PerturbationInput& in, const Perturbat
 using ScoreRigidFn = void (*)(const RigidScoreInput& in, int& count, float& cost);
 
 using Fast9RowFn = void (*)(const std::uint8_t* row, std::ptrdiff_t stride, int n, int threshold, std::uint8_t* flags);
+using Fast9ScoreFn = int (*)(const std::uint8_t* p, const std::ptrdiff_t* offsets, int threshold, int flags);
 
 using BlendRowsFn = void (*)(const std::uint8_t* r0, const std::uint8_t* r1, int n, unsigned w, std::uint8_t* out);
 using ResampleRowFn = void (*)(const std::uint8_t* src, const ResampleGroup* groups, int n, std::uint8_t* out);
@@ -44,6 +45,7 @@ struct KernelSet {
   PerturbationSumsFn perturbation_sums;
   ScoreRigidFn score_rigid;
   Fast9RowFn fast9_row;
+  Fast9ScoreFn fast9_score;
   BlendRowsFn blend_rows;
   ResampleRowFn resample_row;
   Box5RowFn box5_row;
