@@ -51,6 +51,7 @@ std::vector<Param> param_table(Config& c) {
       {"features.fast_threshold", "", "FAST corner threshold (grey levels)", &c.features.fast_threshold, 1, 255},
       {"matching.ratio", "", "symmetric ratio test: best / second-best distance below this", &c.matching.ratio, 1e-6, 1.0},
       {"matching.window_px", "px", "half width of the search window around the motion prior's prediction; 0: every pair, as the paper", &c.matching.window_px, 0, 1e5},
+      {"matching.subpixel_tracking", "", "move each matched keypoint to where the previous keypoint's patch lies, below a pixel; off: integer corners, as the paper", &c.matching.subpixel_tracking},
       {"ransac.inlier_threshold_m", "m", "lambda_inlier: 3-D distance of an inlier", &c.ransac.inlier_threshold_m, 1e-5, 10},
       {"ransac.max_iterations", "", "RANSAC hypotheses at most", &c.ransac.max_iterations, 1, 1000000},
       {"ransac.refine_threshold", "", "refit with the threshold min(3 sigma_inliers, lambda_inlier)", &c.ransac.refine_threshold},

@@ -63,6 +63,9 @@ void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, 
         z = centre;
         gradient.x() = (depth_m.at<float>(v, u + r) - depth_m.at<float>(v, u - r)) / (2.0 * r);
         gradient.y() = (depth_m.at<float>(v + r, u) - depth_m.at<float>(v - r, u)) / (2.0 * r);
+        // Read at the nearest pixel, carried along the slope to the keypoint's own position,
+        // a fraction of a pixel away (more for a coarse pyramid level's keypoint).
+        z += gradient.dot(Eigen::Vector2d(distorted_[i].x - u, distorted_[i].y - v));
       }
     }
     out.depth_m.push_back(z);

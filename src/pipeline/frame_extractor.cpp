@@ -12,7 +12,8 @@ FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
       border_px_(config.features.border_px),
       min_features_(config.ransac.min_inliers),
       detector_(config.features, runner),
-      backprojector_(config.camera, config.depth) {
+      backprojector_(config.camera, config.depth),
+      keep_gray_(config.matching.subpixel_tracking && config.covariance.model != "paper") {
   // The paper's model never refines (pair_estimator.cpp): no clouds to build for it.
   if (config.refinement.enabled && config.covariance.model != "paper") cloud_builder_.emplace(config.camera, config.depth, config.refinement);
 }
@@ -45,6 +46,7 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   detector_.detect(frame.gray, mask_, out.features);
   mark_cost_stage(CostStage::Geometry);
   backprojector_.compute(out.features.keypoints, frame.depth_m, out.geometry);
+  if (keep_gray_) frame.gray.copyTo(out.gray);  // the pair's tracker reads it; reuses out's buffer
   if (cloud_builder_) {
     mark_cost_stage(CostStage::Refine);
     cloud_builder_->build(frame.depth_m, out.cloud);

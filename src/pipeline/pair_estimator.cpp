@@ -95,7 +95,9 @@ PairEstimator::PairEstimator(const Config& config)
       paper_noise_(config.covariance.model == "paper"),
       noise_(sensor_noise(config)),
       fit_noise_(fit_weight_noise(noise_)),
+      tracking_(config.matching.subpixel_tracking && !paper_noise_),
       matcher_(config.matching.ratio),
+      tracker_(config.camera, config.features.orb_scale_factor, config.features.max_features),
       ransac_(config.ransac, sensor_noise(config), config.features.max_features),
       covariance_(config.covariance, config.features.max_features),
       aligner_(config.camera, config.refinement, config.covariance.depth_noise_coeff, config.depth.units_per_m),
@@ -183,7 +185,14 @@ void PairEstimator::describe_pair_noise(const ProcessedFrame& prev, const Proces
   }
 }
 
-void PairEstimator::learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr) {
+bool PairEstimator::track_keypoints(const ProcessedFrame& prev, const ProcessedFrame& curr) {
+  if (!tracking_ || prev.gray.empty() || curr.gray.empty()) return false;
+  return tracker_.track(prev.gray, prev.geometry, curr.gray, curr.geometry, curr.features.keypoints, matches_,
+                        pairs_.match_index, tracked_) > 0;
+}
+
+void PairEstimator::learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                                         const KeypointGeometry& curr_geometry) {
   const Eigen::Isometry3d curr_from_prev = fit_.T_prev_curr.inverse();
   for (int k : fit_.inliers) {
     const Match& m = matches_[static_cast<size_t>(pairs_.match_index[static_cast<size_t>(k)])];
@@ -191,13 +200,14 @@ void PairEstimator::learn_keypoint_sigma(const ProcessedFrame& prev, const Proce
     if (level != curr.features.keypoints[static_cast<size_t>(m.curr)].octave) continue;
     const Eigen::Vector3d q = curr_from_prev * pairs_.prev[static_cast<size_t>(k)];
     if (!(q.z() > 0)) continue;
-    const Eigen::Vector2d off = q.head<2>() / q.z() - curr.geometry.normalized[static_cast<size_t>(m.curr)];
+    const Eigen::Vector2d off = q.head<2>() / q.z() - curr_geometry.normalized[static_cast<size_t>(m.curr)];
     keypoint_sigma_.add(level, std::hypot(off.x() * config_.camera.fx, off.y() * config_.camera.fy));
   }
   keypoint_sigma_.update();
 }
 
-void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s) {
+void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                                          const KeypointGeometry& curr_geometry, double dt_s) {
   inlier_prev_noise_.clear();
   inlier_curr_noise_.clear();
   inlier_cells_.clear();
@@ -215,15 +225,15 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
     const Match& m = matches_[static_cast<size_t>(pairs_.match_index[k])];
     const auto i = static_cast<size_t>(m.prev), j = static_cast<size_t>(m.curr);
     const Eigen::Vector2d pixel_velocity =
-        dt_s > 0 ? Eigen::Vector2d((curr.geometry.pixel[j] - prev.geometry.pixel[i]) / dt_s) : Eigen::Vector2d::Zero();
+        dt_s > 0 ? Eigen::Vector2d((curr_geometry.pixel[j] - prev.geometry.pixel[i]) / dt_s) : Eigen::Vector2d::Zero();
     PointNoise np = keypoint_noise(prev, i, pairs_.prev[k]);
     PointNoise nc = keypoint_noise(curr, j, pairs_.curr[k]);
     np.depth_rate_mps = depth_rate(pairs_.prev[k], prev.geometry.depth_gradient[i], pixel_velocity);
-    nc.depth_rate_mps = depth_rate(pairs_.curr[k], curr.geometry.depth_gradient[j], pixel_velocity);
+    nc.depth_rate_mps = depth_rate(pairs_.curr[k], curr_geometry.depth_gradient[j], pixel_velocity);
     inlier_prev_noise_.push_back(np);
     inlier_curr_noise_.push_back(nc);
     if (cell_px > 0) {
-      const Eigen::Vector2d& u = curr.geometry.pixel[j];
+      const Eigen::Vector2d& u = curr_geometry.pixel[j];
       const int column = std::clamp(static_cast<int>(u.x() / cell_px), 0, cell_columns - 1);
       const int row = std::clamp(static_cast<int>(u.y() / cell_px), 0, 255);
       inlier_cells_.push_back(static_cast<std::uint16_t>(std::min(row * cell_columns + column, 65535)));
@@ -325,13 +335,20 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
 
   Rng covariance_rng(mix(config_.seed, 2 * pair_key + 1));
   Clock::time_point t0;  // each stage below reads the clock at its start
-  if (compensate) {
-    // Second pass: carry the depths to colour time with this pair's own velocity, which is
-    // better than the previous pair's whenever the depth frames are far enough apart.
+  mark_cost_stage(CostStage::Track);
+  t0 = Clock::now();
+  const bool tracked = track_keypoints(prev, curr);
+  const KeypointGeometry& curr_geometry = tracked ? tracked_ : curr.geometry;
+  r.times.match_ms += ms_since(t0);
+  if (compensate || tracked) {
+    // Second pass, on the tracked keypoints: carry the depths to colour time with this pair's
+    // own velocity, which is better than the previous pair's whenever the depth frames are far
+    // enough apart.
     mark_cost_stage(CostStage::PointPairs);
     t0 = Clock::now();
     const MotionPrior own = motion_from(fit_.T_prev_curr, dt_s);
-    build_point_pairs(matches_, prev.geometry, prev.times, curr.geometry, curr.times, &own, pairs_);
+    build_point_pairs(matches_, prev.geometry, prev.times, curr_geometry, curr.times, compensate ? &own : nullptr,
+                      pairs_);
     r.times.backproject_ms += ms_since(t0);
     mark_cost_stage(CostStage::Ransac);
     t0 = Clock::now();
@@ -357,7 +374,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (paper_noise_) {
     cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
   } else {
-    describe_inlier_noise(prev, curr, dt_s);
+    describe_inlier_noise(prev, curr, curr_geometry, dt_s);
     const double timing_sigma_s =
         config_.covariance.timing_sigma_s >= 0 ? config_.covariance.timing_sigma_s : stamp_jitter_.offset_sigma_s();
     cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, inlier_prev_noise_, inlier_curr_noise_, inlier_cells_,
@@ -376,7 +393,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   // it learns (ICL's first 20 pairs; holding it cost 0.49 -> 0.56 mm a pair there).
   const Vector6d xi = xi_from_transform(fit_.T_prev_curr);
   const bool learn = !paper_noise_ && xi.dot(cov.ldlt().solve(xi)) >= kChi2_6_99;
-  if (learn) learn_keypoint_sigma(prev, curr);
+  if (learn) learn_keypoint_sigma(prev, curr, curr_geometry);
   if (config_.refinement.enabled && !paper_noise_) {
     mark_cost_stage(CostStage::Refine);
     r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov);

@@ -58,6 +58,10 @@ struct MatchConfig {
   // windowed search fails, or keeps fewer than twice ransac.min_inliers, is matched again
   // over the whole image. Binary descriptors only (float ones always compare every pair).
   double window_px = 48;
+  // Each matched keypoint of the current frame moved to where the previous keypoint's patch
+  // lies, to a fraction of a pixel (pipeline/track.hpp); off: the detector's integer corners,
+  // as the paper (its covariance model never tracks).
+  bool subpixel_tracking = true;
 };
 
 struct RansacConfig {

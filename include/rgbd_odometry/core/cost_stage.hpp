@@ -27,11 +27,12 @@ enum class CostStage : std::uint32_t {
   Corners,     // detection, our extractor: segment test, score, suppression, spread over cells
   Convert,     // colour to intensity, depth to metres: what a live frame needs too
   Refine,      // the depth maps' coarse clouds and their alignment (pipeline/depth_alignment.hpp)
+  Track,       // the matched keypoints' sub-pixel tracking (pipeline/track.hpp)
 };
-inline constexpr std::size_t kCostStageCount = 13;
+inline constexpr std::size_t kCostStageCount = 14;
 inline constexpr std::array<const char*, kCostStageCount> kCostStageNames{
     "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance", "pyramid", "corners",
-    "convert", "refine"};
+    "convert", "refine", "track"};
 // The first extra argument of the marker call ("RGBD"): tells a marker from a real getpid.
 inline constexpr std::uint32_t kCostMarkerMagic = 0x52474244u;
 

@@ -26,7 +26,7 @@ namespace rgbdo {
 struct KeypointGeometry {
   std::vector<Eigen::Vector2d> normalized;      // undistorted (X/Z, Y/Z)
   std::vector<Eigen::Vector2d> pixel;           // distorted pixel position (the keypoint)
-  std::vector<double> depth_m;                  // 0: unusable (no reading, out of range, occlusion edge)
+  std::vector<double> depth_m;                  // at the keypoint (its nearest pixel along the slope); 0: unusable (no reading, out of range, occlusion edge)
   std::vector<Eigen::Vector2d> depth_gradient;  // dZ/du, dZ/dv in metres per pixel
   void clear();
 };

@@ -23,6 +23,7 @@ struct ProcessedFrame {
   Features features;
   KeypointGeometry geometry;
   DepthCloud cloud;  // empty when refinement.enabled is off
+  cv::Mat gray;      // the intensity image, for the sub-pixel tracker (empty when it is off)
 };
 
 class FrameExtractor {
@@ -41,6 +42,7 @@ class FrameExtractor {
   FeatureDetector detector_;
   KeypointBackProjector backprojector_;
   std::optional<DepthCloudBuilder> cloud_builder_;
+  bool keep_gray_;  // matching.subpixel_tracking
   cv::Mat mask_;
 };
 

@@ -20,6 +20,7 @@
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/pipeline/ransac.hpp"
 #include "rgbd_odometry/pipeline/stamp_jitter.hpp"
+#include "rgbd_odometry/pipeline/track.hpp"
 
 namespace rgbdo {
 
@@ -53,11 +54,17 @@ class PairEstimator {
   Eigen::Matrix3d fit_covariance(const ProcessedFrame& frame, size_t keypoint, const Eigen::Vector3d& p) const;
   // Each point pair's covariances (pair_covariances_) for RANSAC's final fit.
   void describe_pair_noise(const ProcessedFrame& prev, const ProcessedFrame& curr);
-  // The keypoints' localisation learnt from fit_'s inliers' reprojection residuals.
-  void learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr);
+  // The current keypoints of every point pair moved to where the previous keypoints' patches
+  // lie (tracked_); whether any moved.
+  bool track_keypoints(const ProcessedFrame& prev, const ProcessedFrame& curr);
+  // The keypoints' localisation learnt from fit_'s inliers' reprojection residuals, curr_geometry
+  // the current keypoints' (tracked or as detected).
+  void learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                            const KeypointGeometry& curr_geometry);
   // The noise and image cell of each inlier (inlier_prev_noise_, inlier_curr_noise_,
   // inlier_cells_) for the covariance.
-  void describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s);
+  void describe_inlier_noise(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                             const KeypointGeometry& curr_geometry, double dt_s);
 
   // The depth maps' alignment, started at fit_'s motion, fused with it: fit_'s motion and
   // `covariance` (of xi, the features') become the fused ones. The number of depth points
@@ -71,7 +78,10 @@ class PairEstimator {
   SensorNoise noise_;
   SensorNoise fit_noise_;  // the final fit's weights (fit_weight_noise)
   std::array<double, KeypointSigmaEstimate::kMaxLevels> fit_sigma_px_{};  // each level's, in_weight_steps
+  bool tracking_;  // matching.subpixel_tracking, never with the paper's model
   SymmetricMatcher matcher_;
+  SubpixelTracker tracker_;
+  KeypointGeometry tracked_;  // the current frame's geometry, its matched keypoints tracked
   RigidRansac ransac_;
   PerturbationCovariance covariance_;
   DepthAligner aligner_;

@@ -13,6 +13,7 @@
 #include "rgbd_odometry/simd/nearest_two.hpp"
 #include "rgbd_odometry/simd/perturb.hpp"
 #include "rgbd_odometry/simd/score.hpp"
+#include "rgbd_odometry/simd/track.hpp"
 
 namespace rgbdo::simd {
 
@@ -36,6 +37,10 @@ using Box5RowFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, in
 using DepthInRangeRowFn = void (*)(const float* depth, int n, float lo, float hi, std::uint8_t* out);
 using ColourToGrayRowFn = void (*)(const std::uint8_t* pixels, int n, bool red_first, std::uint8_t* out);
 using DepthToMetresRowFn = void (*)(const std::uint16_t* raw, int n, float metres_per_unit, float* out);
+using TrackSample8Fn = void (*)(const std::uint8_t* top_left, std::ptrdiff_t stride, int rows, const std::int32_t* w,
+                                std::int16_t* out);
+using TrackSums8x8Fn = void (*)(const std::int16_t* sampled, const std::int16_t* templ, const std::int16_t* gx,
+                               const std::int16_t* gy, std::int32_t* sums);
 using DiscMomentsFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, std::int32_t* m10, std::int32_t* m01);
 
 struct KernelSet {
@@ -53,6 +58,8 @@ struct KernelSet {
   DiscMomentsFn disc_moments;
   ColourToGrayRowFn colour_to_gray_row;
   DepthToMetresRowFn depth_to_metres_row;
+  TrackSample8Fn track_sample8;
+  TrackSums8x8Fn track_sums8x8;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.
