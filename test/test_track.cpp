@@ -14,8 +14,6 @@
 #include "rgbd_odometry/io/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
-#include "rgbd_odometry/pipeline/detect.hpp"
-#include "rgbd_odometry/pipeline/mask.hpp"
 #include "rgbd_odometry/pipeline/track.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
 #include "runnable_kernel_sets.hpp"

@@ -4,6 +4,7 @@
 
 #include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/pipeline/mask.hpp"
+#include "rgbd_odometry/pipeline/track.hpp"
 
 namespace rgbdo {
 
@@ -13,7 +14,7 @@ FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
       min_features_(config.ransac.min_inliers),
       detector_(config.features, runner),
       backprojector_(config.camera, config.depth),
-      keep_gray_(config.matching.subpixel_tracking && config.covariance.model != "paper") {
+      keep_gray_(tracks_keypoints(config)) {
   // The paper's model never refines (pair_estimator.cpp): no clouds to build for it.
   if (config.refinement.enabled && config.covariance.model != "paper") cloud_builder_.emplace(config.camera, config.depth, config.refinement);
 }

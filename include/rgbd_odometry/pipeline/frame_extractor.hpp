@@ -42,7 +42,7 @@ class FrameExtractor {
   FeatureDetector detector_;
   KeypointBackProjector backprojector_;
   std::optional<DepthCloudBuilder> cloud_builder_;
-  bool keep_gray_;  // matching.subpixel_tracking
+  bool keep_gray_;  // tracks_keypoints(config): the pair's tracker reads the intensity image
   cv::Mat mask_;
 };
 

@@ -21,6 +21,12 @@
 
 namespace rgbdo {
 
+// Whether a pipeline so configured tracks its matched keypoints: matching.subpixel_tracking,
+// never under the paper's covariance model (its pipeline).
+inline bool tracks_keypoints(const Config& config) {
+  return config.matching.subpixel_tracking && config.covariance.model != "paper";
+}
+
 // Where one patch went.
 struct PatchTrack {
   bool ok = false;
