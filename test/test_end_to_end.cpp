@@ -78,11 +78,26 @@ TEST(EndToEnd, SubpixelTrackingLowersTheOneSecondDrift) {
   Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   ASSERT_TRUE(c.matching.subpixel_tracking);
   c.matching.subpixel_tracking = false;
-  const auto corners = replay(c).summary;
+  const auto untracked = replay(c);
+  for (const auto& p : untracked.results) EXPECT_EQ(p.tracked, 0);
+  const auto& corners = untracked.summary;
   const auto& tracked = default_replay().summary;
   EXPECT_LT(tracked.drift_translation_mps.rmse, 0.78 * corners.drift_translation_mps.rmse);
   EXPECT_LT(tracked.drift_rotation_degps.rmse, 0.75 * corners.drift_rotation_degps.rmse);
   EXPECT_LT(tracked.rpe_translation_m.rmse, 1.01 * corners.rpe_translation_m.rmse);
+}
+
+TEST(EndToEnd, MostPointPairsAreTracked) {
+  // Measured on these frames: 7913 of 9730 point pairs tracked (81.3 %); the rest keep their
+  // corners (a patch without texture across it, a track further than its bound).
+  long point_pairs = 0, tracked = 0;
+  for (const auto& p : default_replay().results) {
+    EXPECT_LE(p.tracked, p.point_pairs);
+    point_pairs += p.point_pairs;
+    tracked += p.tracked;
+  }
+  EXPECT_GT(static_cast<double>(tracked), 0.77 * static_cast<double>(point_pairs));
+  EXPECT_LT(static_cast<double>(tracked), 0.85 * static_cast<double>(point_pairs));
 }
 
 TEST(EndToEnd, CovarianceIsConsistentWithoutAFittedScale) {

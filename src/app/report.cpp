@@ -64,7 +64,8 @@ std::string pair_line(const PairResult& r, std::size_t index, bool verbose) {
       << r.point_pairs;
   }
   if (verbose) {
-    s << std::setprecision(2) << "  | features " << r.features_curr << " matches " << r.matches << " thr "
+    s << std::setprecision(2) << "  | features " << r.features_curr << " matches " << r.matches << " tracked "
+      << r.tracked << " thr "
       << r.inlier_threshold_m * 1e3 << "mm | ms detect " << r.times.detect_ms << " match " << r.times.match_ms
       << " backproject " << r.times.backproject_ms << " ransac " << r.times.ransac_ms << " covariance "
       << r.times.covariance_ms << (r.rematched ? " | rematched" : "");
@@ -81,6 +82,8 @@ void PairTallies::add(const PairResult& r) {
     total.covariance_ms += r.times.covariance_ms;
     ++timed;
     depth_refined += r.depth_points > 0 ? 1 : 0;
+    point_pairs += r.point_pairs;
+    tracked += r.tracked;
     sensor = r.sensor;
   }
   rematched += r.rematched ? 1 : 0;
@@ -114,6 +117,10 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
         << ", backproject " << total.backproject_ms / n << ", ransac " << total.ransac_ms / n << ", covariance "
         << total.covariance_ms / n << " ms]\n";
   }
+  if (tallies.tracked > 0)
+    out << std::setprecision(1) << "  sub-pixel tracking: " << tallies.tracked << " of " << tallies.point_pairs
+        << " point pairs (" << 100.0 * static_cast<double>(tallies.tracked) / static_cast<double>(tallies.point_pairs)
+        << " %); the others kept the detector's corner (no texture across the patch, a track too far or off the image)\n";
   if (tallies.rematched > 0)
     out << "  matching: " << tallies.rematched << " pairs matched again over the whole image (the motion window fell short)\n";
   const SensorEstimates& learnt = tallies.sensor;

@@ -185,10 +185,10 @@ void PairEstimator::describe_pair_noise(const ProcessedFrame& prev, const Proces
   }
 }
 
-bool PairEstimator::track_keypoints(const ProcessedFrame& prev, const ProcessedFrame& curr) {
-  if (!tracking_ || prev.gray.empty() || curr.gray.empty()) return false;
+int PairEstimator::track_keypoints(const ProcessedFrame& prev, const ProcessedFrame& curr) {
+  if (!tracking_ || prev.gray.empty() || curr.gray.empty()) return 0;
   return tracker_.track(prev.gray, prev.geometry, curr.gray, curr.geometry, curr.features.keypoints, matches_,
-                        pairs_.match_index, tracked_) > 0;
+                        pairs_.match_index, tracked_);
 }
 
 void PairEstimator::learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr,
@@ -337,7 +337,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   Clock::time_point t0;  // each stage below reads the clock at its start
   mark_cost_stage(CostStage::Track);
   t0 = Clock::now();
-  const bool tracked = track_keypoints(prev, curr);
+  r.tracked = track_keypoints(prev, curr);
+  const bool tracked = r.tracked > 0;
   const KeypointGeometry& curr_geometry = tracked ? tracked_ : curr.geometry;
   r.times.match_ms += ms_since(t0);  // the matches made precise: the log's stage times keep their columns
   if (compensate || tracked) {

@@ -28,6 +28,7 @@ struct PairResult {
   int matches = 0;      // symmetric ratio-test matches
   bool rematched = false;  // the windowed search fell short; matched again over the whole image
   int point_pairs = 0;  // matches with usable depth in both frames
+  int tracked = 0;      // of those, the ones whose current keypoint the sub-pixel tracker moved
   int inliers = 0;
   double inlier_threshold_m = 0;
   int depth_points = 0;  // depth points of the alignment fused with the features; 0: features alone

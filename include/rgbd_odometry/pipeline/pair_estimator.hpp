@@ -55,8 +55,8 @@ class PairEstimator {
   // Each point pair's covariances (pair_covariances_) for RANSAC's final fit.
   void describe_pair_noise(const ProcessedFrame& prev, const ProcessedFrame& curr);
   // The current keypoints of every point pair moved to where the previous keypoints' patches
-  // lie (tracked_); whether any moved.
-  bool track_keypoints(const ProcessedFrame& prev, const ProcessedFrame& curr);
+  // lie (tracked_); how many moved.
+  int track_keypoints(const ProcessedFrame& prev, const ProcessedFrame& curr);
   // The keypoints' localisation learnt from fit_'s inliers' reprojection residuals, curr_geometry
   // the current keypoints' (tracked or as detected).
   void learn_keypoint_sigma(const ProcessedFrame& prev, const ProcessedFrame& curr,
