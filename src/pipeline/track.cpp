@@ -14,8 +14,8 @@ constexpr int kPatch = 8;         // the kernels' patch width
 constexpr int kMaxIterations = 10;
 constexpr double kConverged = 0.01;  // px: a step this small ends the iterations
 // The patch must be textured in both directions: the smaller eigenvalue of its gradients'
-// second-moment matrix, per pixel, at least this (grey levels per pixel, squared). A corner
-// has hundreds; a blank wall or a single edge has under one.
+// second-moment matrix, per pixel, at least this (grey levels per pixel, squared). A blank
+// wall, or a straight edge across the patch, gives little more than its noise there.
 constexpr double kMinTexture = 4.0;
 
 // The top-left pixel and the bilinear weights of a sample grid starting at (x, y).
@@ -24,7 +24,7 @@ struct SampleGrid {
   std::array<std::int32_t, 4> w{};
 };
 
-// Each fraction of a pixel is rounded to 1/128 (0.008 px, a tenth of the tracker's own error)
+// Each fraction of a pixel is rounded to 1/128 (0.008 px, a fifth of the tracker's own error)
 // and the weights are products of the two: never negative and summing to 2^14 exactly. (Weights
 // rounded one by one, as OpenCV's, can sum past 2^14 and leave the last one at -1.)
 SampleGrid grid_at(double x, double y) {
