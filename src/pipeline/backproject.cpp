@@ -24,10 +24,20 @@ void PointPairs::clear() {
   match_index.clear();
 }
 
-KeypointBackProjector::KeypointBackProjector(const CameraConfig& camera, const DepthConfig& depth)
+PixelUndistorter::PixelUndistorter(const CameraConfig& camera)
     : camera_matrix_((cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1)),
-      distortion_(cv::Mat(1, 5, CV_64F, const_cast<double*>(camera.distortion.data())).clone()),
-      depth_(depth) {}
+      distortion_(cv::Mat(1, 5, CV_64F, const_cast<double*>(camera.distortion.data())).clone()) {}
+
+void PixelUndistorter::undistort(const std::vector<cv::Point2f>& pixels, std::vector<cv::Point2f>& out) const {
+  if (pixels.empty()) {
+    out.clear();
+    return;
+  }
+  cv::undistortPoints(pixels, out, camera_matrix_, distortion_);
+}
+
+KeypointBackProjector::KeypointBackProjector(const CameraConfig& camera, const DepthConfig& depth)
+    : undistorter_(camera), depth_(depth) {}
 
 void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& depth_m,
                                     KeypointGeometry& out) {
@@ -36,7 +46,7 @@ void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, 
   const size_t n = keypoints.size();
   distorted_.resize(n);
   for (size_t i = 0; i < n; ++i) distorted_[i] = keypoints[i].pt;
-  if (n > 0) cv::undistortPoints(distorted_, undistorted_, camera_matrix_, distortion_);
+  undistorter_.undistort(distorted_, undistorted_);
 
   const int r = kEdgeRadiusPx;
   for (size_t i = 0; i < n; ++i) {

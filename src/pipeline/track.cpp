@@ -5,8 +5,6 @@
 #include <cmath>
 #include <cstdint>
 
-#include <opencv2/calib3d.hpp>
-
 namespace rgbdo {
 namespace {
 
@@ -58,8 +56,7 @@ bool inside(const cv::Mat& image, const SampleGrid& g, int cols, int rows) {
 
 SubpixelTracker::SubpixelTracker(const CameraConfig& camera, double scale_factor, int max_keypoints,
                                  double max_shift_px)
-    : camera_matrix_((cv::Mat_<double>(3, 3) << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1)),
-      distortion_(cv::Mat(1, 5, CV_64F, const_cast<double*>(camera.distortion.data())).clone()),
+    : undistorter_(camera),
       scale_factor_(scale_factor),
       max_shift_px_(max_shift_px),
       sample8_(simd::active_kernels().track_sample8),
@@ -144,7 +141,7 @@ int SubpixelTracker::track(const cv::Mat& prev_gray, const KeypointGeometry& pre
     moved_keypoint_.push_back(static_cast<int>(j));
   }
   if (moved_.empty()) return 0;
-  cv::undistortPoints(moved_, undistorted_, camera_matrix_, distortion_);
+  undistorter_.undistort(moved_, undistorted_);
   for (size_t k = 0; k < moved_.size(); ++k)
     out.normalized[static_cast<size_t>(moved_keypoint_[k])] = {undistorted_[k].x, undistorted_[k].y};
   return static_cast<int>(moved_.size());

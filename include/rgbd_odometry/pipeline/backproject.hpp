@@ -31,13 +31,26 @@ struct KeypointGeometry {
   void clear();
 };
 
+// Distorted pixel positions to undistorted normalised image coordinates (X/Z, Y/Z), by the
+// camera's calibration: the keypoints' rays (KeypointBackProjector) and the tracked ones'
+// (pipeline/track.hpp) come from this one model.
+class PixelUndistorter {
+ public:
+  explicit PixelUndistorter(const CameraConfig& camera);
+  // out[i] is the ray of pixels[i]; out is resized (no allocation within its capacity).
+  void undistort(const std::vector<cv::Point2f>& pixels, std::vector<cv::Point2f>& out) const;
+
+ private:
+  cv::Mat camera_matrix_, distortion_;
+};
+
 class KeypointBackProjector {
  public:
   KeypointBackProjector(const CameraConfig& camera, const DepthConfig& depth);
   void compute(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& depth_m, KeypointGeometry& out);
 
  private:
-  cv::Mat camera_matrix_, distortion_;
+  PixelUndistorter undistorter_;
   DepthConfig depth_;
   std::vector<cv::Point2f> distorted_, undistorted_;
 };

@@ -55,7 +55,7 @@ class SubpixelTracker {
             const std::vector<Match>& matches, std::span<const int> which, KeypointGeometry& out);
 
  private:
-  cv::Mat camera_matrix_, distortion_;
+  PixelUndistorter undistorter_;
   double scale_factor_;
   double max_shift_px_;
   simd::TrackSample8Fn sample8_;
