@@ -1,4 +1,7 @@
-"""Reads the program's --evaluation CSV: one home for its format, shared by the bench scripts."""
+"""Reads the program's --evaluation and --log CSVs: one home for their formats, shared by the
+bench scripts."""
+import csv
+import math
 import re
 import sys
 
@@ -28,3 +31,37 @@ def read_evaluation(path):
         sys.exit(f"{path} holds no evaluated pairs")
     data = np.array(rows)
     return {name: data[:, i] for i, name in enumerate(header)}, allowance
+
+
+def stamp_key(t):
+    """A pair's stamp as a join key: the files write their stamps to the microsecond."""
+    return round(float(t) * 1e6)
+
+
+def rotation_vector(qw, qx, qy, qz):
+    if qw < 0:
+        qw, qx, qy, qz = -qw, -qx, -qy, -qz
+    s = math.sqrt(qx * qx + qy * qy + qz * qz)
+    if s < 1e-15:
+        return [0.0, 0.0, 0.0]
+    angle = 2 * math.atan2(s, qw)
+    return [angle * qx / s, angle * qy / s, angle * qz / s]
+
+
+def read_rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def read_log(path):
+    """The --log file's solved pairs by stamp_key(t_curr): (t_prev, t_curr, xi, covariance), xi =
+    (t [m], rotation vector [rad]) as the evaluation's errors are."""
+    pairs = {}
+    for r in read_rows(path):
+        if r["status"] != "ok":
+            continue
+        xi = [float(r[a]) for a in ("tx", "ty", "tz")]
+        xi += rotation_vector(float(r["qw"]), float(r["qx"]), float(r["qy"]), float(r["qz"]))
+        cov = np.array([[float(r[f"c{i}{j}"]) for j in range(6)] for i in range(6)])
+        pairs[stamp_key(r["t_curr"])] = (float(r["t_prev"]), float(r["t_curr"]), np.array(xi), cov)
+    return pairs

@@ -22,7 +22,6 @@ and along the eigen-directions of each pair's reported covariance, whitened by i
 first: there a covariance that covers our own error has `ours` <= 1, and `common` is what a
 check against this ground truth charges to us besides it.
 """
-import csv
 import math
 import os
 import sys
@@ -30,44 +29,18 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import read_evaluation
+from evaluation_csv import read_evaluation, read_log, read_rows, stamp_key
 
 AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
-
-
-def rotation_vector(qw, qx, qy, qz):
-    if qw < 0:
-        qw, qx, qy, qz = -qw, -qx, -qy, -qz
-    s = math.sqrt(qx * qx + qy * qy + qz * qz)
-    if s < 1e-15:
-        return [0.0, 0.0, 0.0]
-    angle = 2 * math.atan2(s, qw)
-    return [angle * qx / s, angle * qy / s, angle * qz / s]
-
-
-def key(t):
-    return round(float(t) * 1e6)  # the files write their stamps to the microsecond
-
-
-def read_rows(path):
-    with open(path) as f:
-        return list(csv.DictReader(line for line in f if not line.startswith("#")))
 
 
 def read_inputs(log_path, evaluation_path, peer_path):
     """Pairs present, solved, in all three files: ours, peer (xi), e_ours, reported covariance;
     and the evaluation's ground-truth allowance."""
-    ours = {}
-    for r in read_rows(log_path):
-        if r["status"] != "ok":
-            continue
-        xi = [float(r[a]) for a in ("tx", "ty", "tz")]
-        xi += rotation_vector(float(r["qw"]), float(r["qx"]), float(r["qy"]), float(r["qz"]))
-        cov = np.array([[float(r[f"c{i}{j}"]) for j in range(6)] for i in range(6)])
-        ours[key(r["t_curr"])] = (np.array(xi), cov)
+    ours = {k: (xi, cov) for k, (_, _, xi, cov) in read_log(log_path).items()}
     evaluation, allowance = read_evaluation(evaluation_path)
-    errors = {key(t): np.array([evaluation["e_" + a][n] for a in AXES]) for n, t in enumerate(evaluation["t_s"])}
-    peer = {key(r["t_curr"]): np.array([float(r[a]) for a in AXES]) for r in read_rows(peer_path) if r["ok"] == "1"}
+    errors = {stamp_key(t): np.array([evaluation["e_" + a][n] for a in AXES]) for n, t in enumerate(evaluation["t_s"])}
+    peer = {stamp_key(r["t_curr"]): np.array([float(r[a]) for a in AXES]) for r in read_rows(peer_path) if r["ok"] == "1"}
     keys = sorted(k for k in ours if k in errors and k in peer and np.all(np.isfinite(errors[k])))
     if not keys:
         sys.exit(f"peer_check: no pair is in all of {log_path}, {evaluation_path} and {peer_path}")

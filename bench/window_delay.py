@@ -1,0 +1,168 @@
+#!/usr/bin/python3
+"""How much of the drift over windows is a delay of the stamps.
+
+    bench/window_delay.py LOG.csv EVALUATION.csv [--window S]
+    bench/window_delay.py --self-test
+
+LOG.csv and EVALUATION.csv are one run's --log and --evaluation files. If every frame was
+taken d seconds before its stamp, each pair measures the motion over its stamps' interval
+moved d earlier, and its error is about -d x (the camera's rate at its newer stamp - the rate
+at its older one). Summed over the consecutive pairs of a window, those errors telescope to
+-d x (the rate at the window's end - the rate at its start): a delay makes the drift over a
+window follow the change of rate across it, and nothing else does so for every window alike.
+
+Per axis, the windows' summed errors (first order: small rotations per pair) are regressed
+on the change of the ground truth's rate between the window's end and start stamps. The slope
+is minus the delay (a negative slope: the frames were taken before their stamps), R^2 the
+share of that axis's drift the delay explains, and "rest" the drift left without it. A
+flight controller told the delay (PX4 EKF2_EV_DELAY, ArduPilot VISO_DELAY_MS) does not see
+that share; an evaluation at the stamps does, for every method run on them.
+"""
+import math
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+from evaluation_csv import read_evaluation, read_log, stamp_key
+
+AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
+
+
+def read_pairs(log_path, evaluation_path):
+    """Pairs in both files with a finite error, in time order: t_prev, t_curr, xi, error."""
+    log = read_log(log_path)
+    evaluation, _ = read_evaluation(evaluation_path)
+    rows = []
+    for n, t in enumerate(evaluation["t_s"]):
+        k = stamp_key(t)
+        error = np.array([evaluation["e_" + a][n] for a in AXES])
+        if k in log and np.all(np.isfinite(error)):
+            t_prev, t_curr, xi, _ = log[k]
+            rows.append((t_prev, t_curr, xi, error))
+    if len(rows) < 3:
+        sys.exit(f"window_delay: fewer than 3 pairs in both {log_path} and {evaluation_path}")
+    rows.sort(key=lambda r: r[1])
+    t_prev, t_curr, xi, error = (np.array([r[i] for r in rows]) for i in range(4))
+    return t_prev, t_curr, xi, error
+
+
+def windows(t_prev, t_curr, window_s):
+    """(first, last) pair of each window: consecutive pairs (each starting where the one before
+    ended) spanning window_s, to within half a pair."""
+    out = []
+    n = len(t_curr)
+    for i in range(n):
+        j = i
+        while j + 1 < n and abs(t_prev[j + 1] - t_curr[j]) < 1e-6 and t_curr[j + 1] - t_prev[i] <= window_s + 0.5 * (
+                t_curr[j + 1] - t_prev[j + 1]):
+            j += 1
+        if t_curr[j] - t_prev[i] >= window_s - 0.5 * (t_curr[j] - t_prev[j]) and j > i:
+            out.append((i, j))
+    return out
+
+
+def analyse(log_path, evaluation_path, window_s=1.0):
+    """Per axis: delay (s), R^2, rms of the windows' error and of what the delay leaves; the count."""
+    t_prev, t_curr, xi, error = read_pairs(log_path, evaluation_path)
+    rate = (xi - error) / (t_curr - t_prev)[:, None]  # the ground truth's: the files hold xi - xi_gt
+    spans = windows(t_prev, t_curr, window_s)
+    if len(spans) < 3:
+        sys.exit(f"window_delay: fewer than 3 windows of {window_s} s of consecutive pairs")
+    summed = np.array([error[i:j + 1].sum(axis=0) for i, j in spans])
+    # The rates at the window's two end stamps, from its two outer pairs' mean rates (theirs are
+    # half a pair inside), carried out by half a pair at the rate's own change.
+    change = np.array([(1.5 * rate[j] - 0.5 * rate[j - 1]) - (1.5 * rate[i] - 0.5 * rate[i + 1]) for i, j in spans])
+    result = []
+    for a in range(6):
+        y, x = summed[:, a], change[:, a]
+        slope = float(np.dot(x, y) / np.dot(x, x)) if np.dot(x, x) > 0 else 0.0
+        left = y - slope * x
+        total = float(np.mean(y * y))
+        r2 = 1 - float(np.mean(left * left)) / total if total > 0 else 0.0
+        result.append((-slope, r2, math.sqrt(total), math.sqrt(float(np.mean(left * left)))))
+    return result, len(spans)
+
+
+def report(log_path, evaluation_path, window_s):
+    per_axis, count = analyse(log_path, evaluation_path, window_s)
+    print(f"{count} windows of {window_s:g} s: summed error regressed on the change of the ground truth's rate")
+    print("axis   delay (ms)   R^2   drift rms   without the delay   (mm or mdeg per window)")
+    for a, (delay, r2, total, rest) in zip(AXES, per_axis):
+        scale = 1e3 if a.startswith("t") else 1e3 * 180 / math.pi
+        print(f"  {a}   {delay * 1e3:+8.1f}   {r2:5.2f}   {total * scale:9.2f}   {rest * scale:9.2f}")
+    for name, axes, scale, unit in (("translation", range(3), 1e3, "mm"), ("rotation", range(3, 6), 1e3 * 180 / math.pi,
+                                                                              "mdeg")):
+        total = math.sqrt(sum(per_axis[a][2] ** 2 for a in axes))
+        rest = math.sqrt(sum(per_axis[a][3] ** 2 for a in axes))
+        print(f"{name}: {total * scale:.2f} {unit} per window, {rest * scale:.2f} without each axis's delay")
+
+
+def self_test():
+    """Synthetic pairs taken a known delay before their stamps, through the same files and code:
+    the delay is read back on every axis, and a run with none reads none."""
+    rng = np.random.default_rng(11)
+    failures = []
+    for true_delay in (0.020, 0.0):
+        n = 1800
+        dt = 1 / 30 + rng.normal(0, 0.001, n)
+        t = 1000 + np.concatenate([[0], np.cumsum(dt)])
+        # Smooth rates: a few sinusoids per axis (m/s, rad/s), evaluated at the frames' true times.
+        freq = rng.uniform(0.2, 1.0, (6, 3))
+        amp = np.array([0.2, 0.2, 0.2, 0.3, 0.3, 0.3])[:, None] * rng.uniform(0.3, 1.0, (6, 3))
+        phase = rng.uniform(0, 2 * math.pi, (6, 3))
+
+        def position(times):  # integral of the rates
+            return np.array([[np.sum(amp[a] / (2 * math.pi * freq[a]) * np.sin(2 * math.pi * freq[a] * s + phase[a]))
+                              for a in range(6)] for s in times])
+        at_stamps = position(t)
+        taken = position(t - true_delay)
+        gt = np.diff(at_stamps, axis=0)
+        xi = np.diff(taken, axis=0) + rng.normal(0, 2e-4, (n, 6))  # what the pairs measure, with noise
+        with tempfile.TemporaryDirectory() as tmp:
+            log_path, evaluation_path = os.path.join(tmp, "log.csv"), os.path.join(tmp, "evaluation.csv")
+            with open(log_path, "w") as log, open(evaluation_path, "w") as ev:
+                log.write("t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw," +
+                          ",".join(f"c{i}{j}" for i in range(6) for j in range(6)) + "\n")
+                ev.write("# synthetic\nt_s," + ",".join("e_" + a for a in AXES) + "\n")
+                for k in range(n):
+                    angle = np.linalg.norm(xi[k, 3:])
+                    axis = xi[k, 3:] / angle
+                    q = [math.cos(angle / 2)] + list(axis * math.sin(angle / 2))
+                    log.write(f"{t[k]:.6f},{t[k + 1]:.6f},ok,100," + ",".join(f"{x:.12g}" for x in xi[k, :3]) + "," +
+                              ",".join(f"{x:.12g}" for x in q[1:] + q[:1]) + "," + ",".join(["1e-6"] * 36) + "\n")
+                    ev.write(f"{t[k + 1]:.6f}," + ",".join(f"{x:.12g}" for x in xi[k] - gt[k]) + "\n")
+                log.write(f"{t[n]:.6f},{t[n] + 1 / 30:.6f},ransac_failed,0," + ",".join(["nan"] * 43) + "\n")
+            per_axis, count = analyse(log_path, evaluation_path, 1.0)
+        if not 1700 <= count <= 1780:
+            failures.append(f"delay {true_delay}: {count} windows of 1 s from {n} pairs of 1/30 s")
+        for a, (delay, r2, _, _) in zip(AXES, per_axis):
+            # First-order telescoping: the fitted delay is within a millisecond of the true one.
+            if abs(delay - true_delay) > 0.001:
+                failures.append(f"delay {true_delay * 1e3:.0f} ms, {a}: read {delay * 1e3:.2f} ms")
+            if true_delay > 0 and r2 < 0.8:
+                failures.append(f"delay {true_delay * 1e3:.0f} ms, {a}: R^2 {r2:.2f}, expected most of the drift")
+    if failures:
+        print("window_delay self-test FAILED:\n  " + "\n  ".join(failures))
+        return 1
+    print("window_delay self-test passed: a 20 ms delay read back on every axis within 1 ms, none where there is none")
+    return 0
+
+
+def main():
+    args = sys.argv[1:]
+    if args == ["--self-test"]:
+        return self_test()
+    window_s = 1.0
+    if len(args) == 4 and args[2] == "--window":
+        window_s = float(args[3])
+        args = args[:2]
+    if len(args) != 2:
+        sys.exit(__doc__)
+    report(args[0], args[1], window_s)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
