@@ -1,5 +1,5 @@
-"""Reads the program's --evaluation and --log CSVs: one home for their formats, shared by the
-bench scripts."""
+"""Reads the program's --evaluation and --log CSVs (and writes --log rows, for the scripts'
+self-tests): one home for their formats, shared by the bench scripts."""
 import csv
 import math
 import re
@@ -65,3 +65,16 @@ def read_log(path):
         cov = np.array([[float(r[f"c{i}{j}"]) for j in range(6)] for i in range(6)])
         pairs[stamp_key(r["t_curr"])] = (float(r["t_prev"]), float(r["t_curr"]), np.array(xi), cov)
     return pairs
+
+
+LOG_HEADER = "t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw," + ",".join(
+    f"c{i}{j}" for i in range(6) for j in range(6))
+
+
+def log_row(t_prev, t_curr, xi, covariance):
+    """A solved pair as the program's --log writes it (100 inliers), from xi = (t, rotation vector)."""
+    angle = float(np.linalg.norm(xi[3:]))
+    axis = xi[3:] / angle if angle > 0 else np.zeros(3)
+    q = list(axis * math.sin(angle / 2)) + [math.cos(angle / 2)]  # qx, qy, qz, qw
+    return (f"{t_prev:.6f},{t_curr:.6f},ok,100," + ",".join(f"{x:.12g}" for x in list(xi[:3]) + q) + "," +
+            ",".join(f"{x:.12g}" for x in np.ravel(covariance)))

@@ -29,7 +29,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import read_evaluation, read_log, read_rows, stamp_key
+from evaluation_csv import LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key
 
 AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
 
@@ -117,8 +117,7 @@ def self_test():
     with tempfile.TemporaryDirectory() as tmp:
         paths = [os.path.join(tmp, name) for name in ("log.csv", "evaluation.csv", "peer.csv")]
         with open(paths[0], "w") as log, open(paths[1], "w") as ev, open(paths[2], "w") as peer:
-            log.write("t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw," +
-                      ",".join(f"c{i}{j}" for i in range(6) for j in range(6)) + "\n")
+            log.write(LOG_HEADER + "\n")
             ev.write("# synthetic\nt_s," + ",".join("e_" + a for a in AXES) + "\n")
             peer.write("t_prev,t_curr,ok," + ",".join(AXES) + "\n")
             for k in range(n):
@@ -130,12 +129,8 @@ def self_test():
                 common = in_basis @ rng.normal(0, np.sqrt(true_common))
                 ours = truth + common + in_basis @ rng.normal(0, np.sqrt(true_ours))
                 other = truth + common + in_basis @ rng.normal(0, np.sqrt(true_peer))
-                angle = np.linalg.norm(ours[3:])
-                axis = ours[3:] / angle
-                qv = np.concatenate([axis * math.sin(angle / 2), [math.cos(angle / 2)]])
                 t = 1000 + k / 30
-                log.write(f"{t - 1 / 30:.6f},{t:.6f},ok,100," + ",".join(f"{x:.12g}" for x in list(ours[:3]) + list(qv)) +
-                          "," + ",".join(f"{x:.12g}" for x in cov.ravel()) + "\n")
+                log.write(log_row(t - 1 / 30, t, ours, cov) + "\n")
                 ev.write(f"{t:.6f}," + ",".join(f"{x:.12g}" for x in ours - truth) + "\n")
                 peer.write(f"{t - 1 / 30:.6f},{t:.6f},1," + ",".join(f"{x:.12g}" for x in other) + "\n")
             peer.write(f"{t:.6f},{t + 1 / 30:.6f},0,nan,nan,nan,nan,nan,nan\n")  # a failed peer pair is skipped

@@ -14,7 +14,7 @@ window follow the change of rate across it, and nothing else does so for every w
 Per axis, the windows' summed errors (first order: small rotations per pair) are regressed
 on the change of the ground truth's rate between the window's end and start stamps. The slope
 is minus the delay (a negative slope: the frames were taken before their stamps), R^2 the
-share of that axis's drift the delay explains, and "rest" the drift left without it. A
+share of that axis's drift the delay explains, and "without the delay" the drift left. A
 flight controller told the delay (PX4 EKF2_EV_DELAY, ArduPilot VISO_DELAY_MS) does not see
 that share; an evaluation at the stamps does, for every method run on them.
 """
@@ -25,7 +25,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import read_evaluation, read_log, stamp_key
+from evaluation_csv import LOG_HEADER, log_row, read_evaluation, read_log, stamp_key
 
 AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
 
@@ -123,15 +123,10 @@ def self_test():
         with tempfile.TemporaryDirectory() as tmp:
             log_path, evaluation_path = os.path.join(tmp, "log.csv"), os.path.join(tmp, "evaluation.csv")
             with open(log_path, "w") as log, open(evaluation_path, "w") as ev:
-                log.write("t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw," +
-                          ",".join(f"c{i}{j}" for i in range(6) for j in range(6)) + "\n")
+                log.write(LOG_HEADER + "\n")
                 ev.write("# synthetic\nt_s," + ",".join("e_" + a for a in AXES) + "\n")
                 for k in range(n):
-                    angle = np.linalg.norm(xi[k, 3:])
-                    axis = xi[k, 3:] / angle
-                    q = [math.cos(angle / 2)] + list(axis * math.sin(angle / 2))
-                    log.write(f"{t[k]:.6f},{t[k + 1]:.6f},ok,100," + ",".join(f"{x:.12g}" for x in xi[k, :3]) + "," +
-                              ",".join(f"{x:.12g}" for x in q[1:] + q[:1]) + "," + ",".join(["1e-6"] * 36) + "\n")
+                    log.write(log_row(t[k], t[k + 1], xi[k], np.eye(6) * 1e-6) + "\n")
                     ev.write(f"{t[k + 1]:.6f}," + ",".join(f"{x:.12g}" for x in xi[k] - gt[k]) + "\n")
                 log.write(f"{t[n]:.6f},{t[n] + 1 / 30:.6f},ransac_failed,0," + ",".join(["nan"] * 43) + "\n")
             per_axis, count = analyse(log_path, evaluation_path, 1.0)
