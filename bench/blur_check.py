@@ -15,9 +15,7 @@ import sys
 
 import numpy as np
 
-from evaluation_csv import CHI2_6_95, read_evaluation
-
-AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
+from evaluation_csv import AXES, CHI2_6_95, read_evaluation
 
 
 def summary(path):

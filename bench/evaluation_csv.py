@@ -8,6 +8,7 @@ import sys
 import numpy as np
 
 CHI2_6_95 = 12.5916  # upper 95 % bound of chi2(6): the gate a joint 6-D NEES is held to
+AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]  # the order of xi and of the evaluation's e_ columns
 
 
 def read_evaluation(path):
@@ -78,3 +79,48 @@ def log_row(t_prev, t_curr, xi, covariance):
     q = list(axis * math.sin(angle / 2)) + [math.cos(angle / 2)]  # qx, qy, qz, qw
     return (f"{t_prev:.6f},{t_curr:.6f},ok,100," + ",".join(f"{x:.12g}" for x in list(xi[:3]) + q) + "," +
             ",".join(f"{x:.12g}" for x in np.ravel(covariance)))
+
+
+def read_pairs(log_path, evaluation_path):
+    """Pairs in both files with a finite error, in time order: t_prev, t_curr, xi, error."""
+    log = read_log(log_path)
+    evaluation, _ = read_evaluation(evaluation_path)
+    rows = []
+    for n, t in enumerate(evaluation["t_s"]):
+        k = stamp_key(t)
+        error = np.array([evaluation["e_" + a][n] for a in AXES])
+        if k in log and np.all(np.isfinite(error)):
+            t_prev, t_curr, xi, _ = log[k]
+            rows.append((t_prev, t_curr, xi, error))
+    if len(rows) < 3:
+        sys.exit(f"fewer than 3 pairs in both {log_path} and {evaluation_path}")
+    rows.sort(key=lambda r: r[1])
+    t_prev, t_curr, xi, error = (np.array([r[i] for r in rows]) for i in range(4))
+    return t_prev, t_curr, xi, error
+
+
+def windows(t_prev, t_curr, window_s):
+    """(first, last) pair of each window: consecutive pairs (each starting where the one before
+    ended) spanning window_s, to within half a pair."""
+    out = []
+    n = len(t_curr)
+    for i in range(n):
+        j = i
+        while j + 1 < n and abs(t_prev[j + 1] - t_curr[j]) < 1e-6 and t_curr[j + 1] - t_prev[i] <= window_s + 0.5 * (
+                t_curr[j + 1] - t_prev[j + 1]):
+            j += 1
+        if t_curr[j] - t_prev[i] >= window_s - 0.5 * (t_curr[j] - t_prev[j]) and j > i:
+            out.append((i, j))
+    return out
+
+
+def log_evaluation_and_option(args, flag, usage):
+    """A bench script's command line, LOG.csv EVALUATION.csv [FLAG VALUE]: the two paths and
+    VALUE's text (None without the flag); anything else exits with the usage."""
+    option = None
+    if len(args) == 4 and args[2] == flag:
+        option = args[3]
+        args = args[:2]
+    if len(args) != 2:
+        sys.exit(usage)
+    return args[0], args[1], option

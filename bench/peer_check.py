@@ -29,9 +29,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key
-
-AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
+from evaluation_csv import AXES, LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key
 
 
 def read_inputs(log_path, evaluation_path, peer_path):

@@ -25,42 +25,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import LOG_HEADER, log_row, read_evaluation, read_log, stamp_key
-
-AXES = ["tx", "ty", "tz", "rx", "ry", "rz"]
-
-
-def read_pairs(log_path, evaluation_path):
-    """Pairs in both files with a finite error, in time order: t_prev, t_curr, xi, error."""
-    log = read_log(log_path)
-    evaluation, _ = read_evaluation(evaluation_path)
-    rows = []
-    for n, t in enumerate(evaluation["t_s"]):
-        k = stamp_key(t)
-        error = np.array([evaluation["e_" + a][n] for a in AXES])
-        if k in log and np.all(np.isfinite(error)):
-            t_prev, t_curr, xi, _ = log[k]
-            rows.append((t_prev, t_curr, xi, error))
-    if len(rows) < 3:
-        sys.exit(f"window_delay: fewer than 3 pairs in both {log_path} and {evaluation_path}")
-    rows.sort(key=lambda r: r[1])
-    t_prev, t_curr, xi, error = (np.array([r[i] for r in rows]) for i in range(4))
-    return t_prev, t_curr, xi, error
-
-
-def windows(t_prev, t_curr, window_s):
-    """(first, last) pair of each window: consecutive pairs (each starting where the one before
-    ended) spanning window_s, to within half a pair."""
-    out = []
-    n = len(t_curr)
-    for i in range(n):
-        j = i
-        while j + 1 < n and abs(t_prev[j + 1] - t_curr[j]) < 1e-6 and t_curr[j + 1] - t_prev[i] <= window_s + 0.5 * (
-                t_curr[j + 1] - t_prev[j + 1]):
-            j += 1
-        if t_curr[j] - t_prev[i] >= window_s - 0.5 * (t_curr[j] - t_prev[j]) and j > i:
-            out.append((i, j))
-    return out
+from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row, read_pairs, windows
 
 
 def analyse(log_path, evaluation_path, window_s=1.0):
@@ -149,13 +114,14 @@ def main():
     args = sys.argv[1:]
     if args == ["--self-test"]:
         return self_test()
-    window_s = 1.0
-    if len(args) == 4 and args[2] == "--window":
-        window_s = float(args[3])
-        args = args[:2]
-    if len(args) != 2:
-        sys.exit(__doc__)
-    report(args[0], args[1], window_s)
+    log_path, evaluation_path, text = log_evaluation_and_option(args, "--window", __doc__)
+    try:
+        window_s = float(text) if text is not None else 1.0
+    except ValueError:
+        window_s = math.nan
+    if not window_s > 0:
+        sys.exit(f"window_delay: --window '{text}' must be a number of seconds above 0")
+    report(log_path, evaluation_path, window_s)
     return 0
 
 
