@@ -29,13 +29,14 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key
+from evaluation_csv import AXES, LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key, windows
 
 
 def read_inputs(log_path, evaluation_path, peer_path):
-    """Pairs present, solved, in all three files: ours, peer (xi), e_ours, reported covariance;
-    and the evaluation's ground-truth allowance."""
-    ours = {k: (xi, cov) for k, (_, _, xi, cov) in read_log(log_path).items()}
+    """Pairs present, solved, in all three files, in time order: their stamps (t_prev, t_curr),
+    ours, peer (xi), e_ours, reported covariance; and the evaluation's ground-truth allowance."""
+    log = read_log(log_path)
+    ours = {k: (xi, cov) for k, (_, _, xi, cov) in log.items()}
     evaluation, allowance = read_evaluation(evaluation_path)
     errors = {stamp_key(t): np.array([evaluation["e_" + a][n] for a in AXES]) for n, t in enumerate(evaluation["t_s"])}
     peer = {stamp_key(r["t_curr"]): np.array([float(r[a]) for a in AXES]) for r in read_rows(peer_path) if r["ok"] == "1"}
@@ -43,8 +44,9 @@ def read_inputs(log_path, evaluation_path, peer_path):
     if not keys:
         sys.exit(f"peer_check: no pair is in all of {log_path}, {evaluation_path} and {peer_path}")
     xi = np.array([ours[k][0] for k in keys])
-    return (xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]), np.array([ours[k][1] for k in keys]),
-            allowance)
+    stamps = np.array([log[k][:2] for k in keys])
+    return (stamps, xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]),
+            np.array([ours[k][1] for k in keys]), allowance)
 
 
 def three_cornered_hat(ours_gt, peer_gt):
@@ -73,12 +75,24 @@ def allowance_along(covariances, allowance):
     return out / len(covariances)
 
 
+def drift(stamps, errors, window_s=1.0):
+    """Over windows of consecutive pairs spanning window_s: the rms of the summed errors'
+    translation (m) and rotation (rad), to first order; and the number of windows."""
+    spans = windows(stamps[:, 0], stamps[:, 1], window_s)
+    if not spans:
+        return math.nan, math.nan, 0
+    summed = np.array([errors[i:j + 1].sum(axis=0) for i, j in spans])
+    return (math.sqrt(np.mean(np.sum(summed[:, :3] ** 2, axis=1))), math.sqrt(np.mean(np.sum(summed[:, 3:] ** 2, axis=1))),
+            len(spans))
+
+
 def analyse(log_path, evaluation_path, peer_path):
-    xi, peer, e_ours, cov, allowance = read_inputs(log_path, evaluation_path, peer_path)
+    stamps, xi, peer, e_ours, cov, allowance = read_inputs(log_path, evaluation_path, peer_path)
     e_peer = e_ours - (xi - peer)  # the program wrote e_ours = xi - xi_gt
     per_axis = three_cornered_hat(e_ours, e_peer)
     along = three_cornered_hat(whitened(e_ours, cov), whitened(e_peer, cov))
-    return len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, allowance)
+    return (len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, allowance),
+            (drift(stamps, e_ours), drift(stamps, e_peer)))
 
 
 def rms_text(mean_square, unit_scale):
@@ -86,8 +100,14 @@ def rms_text(mean_square, unit_scale):
 
 
 def report(log_path, evaluation_path, peer_path):
-    n, (e_ours, e_peer), per_axis, along, allowance = analyse(log_path, evaluation_path, peer_path)
+    n, (e_ours, e_peer), per_axis, along, allowance, drifts = analyse(log_path, evaluation_path, peer_path)
     print(f"{n} pairs solved by both, with ground truth")
+    print("on these pairs              pair rms: translation  rotation | over 1-s windows (first order): translation  rotation")
+    for name, e, (t_rms, r_rms, count) in (("ours", e_ours, drifts[0]), ("peer", e_peer, drifts[1])):
+        pair_t = 1e3 * math.sqrt(np.mean(np.sum(e[:, :3] ** 2, axis=1)))
+        pair_r = math.degrees(math.sqrt(np.mean(np.sum(e[:, 3:] ** 2, axis=1))))
+        print(f"  {name}                         {pair_t:6.2f} mm  {pair_r:7.3f} deg |"
+              f"   {1e3 * t_rms:6.2f} mm  {math.degrees(r_rms):6.3f} deg  ({count} windows)")
     print("rms per axis (mm, mrad):  ours-gt  peer-gt  ours-peer | common     ours     peer")
     for i, a in enumerate(AXES):
         d = [np.mean(x[:, i] ** 2) for x in (e_ours, e_peer, e_ours - e_peer)]
@@ -132,8 +152,17 @@ def self_test():
                 ev.write(f"{t:.6f}," + ",".join(f"{x:.12g}" for x in ours - truth) + "\n")
                 peer.write(f"{t - 1 / 30:.6f},{t:.6f},1," + ",".join(f"{x:.12g}" for x in other) + "\n")
             peer.write(f"{t:.6f},{t + 1 / 30:.6f},0,nan,nan,nan,nan,nan,nan\n")  # a failed peer pair is skipped
-        count, _, _, along, allowance = analyse(*paths)
+        count, (e_ours, e_peer), _, along, allowance, drifts = analyse(*paths)
     failures = []
+    # Independent pairs: a window of L pairs sums to L times a pair's mean square; 30 pairs a
+    # window of 1 s at 30 Hz (about 130 independent windows: within 20 %).
+    for name, e, (t_rms, r_rms, windows_read) in (("ours", e_ours, drifts[0]), ("peer", e_peer, drifts[1])):
+        if not n - 35 <= windows_read <= n - 25:
+            failures.append(f"{name}: {windows_read} windows of 1 s from {n} consecutive pairs of 1/30 s")
+        for part, got, axes in (("translation", t_rms, slice(0, 3)), ("rotation", r_rms, slice(3, 6))):
+            expected = math.sqrt(30 * np.mean(np.sum(e[:, axes] ** 2, axis=1)))
+            if not abs(got - expected) <= 0.2 * expected:
+                failures.append(f"{name}: 1-s drift in {part} {got:.4g}, expected {expected:.4g} within 20 %")
     if count != n:
         failures.append(f"{count} pairs read, {n} written")
     if np.any(allowance != 0):
@@ -147,7 +176,8 @@ def self_test():
     if failures:
         print("peer_check self-test FAILED:\n  " + "\n  ".join(failures))
         return 1
-    print(f"peer_check self-test passed: {n} synthetic pairs, the common, own and peer mean squares recovered")
+    print(f"peer_check self-test passed: {n} synthetic pairs, the common, own and peer mean squares and both "
+          "drifts over 1 s recovered")
     return 0
 
 
