@@ -21,6 +21,9 @@ comparison):
 and along the eigen-directions of each pair's reported covariance, whitened by it, smallest
 first: there a covariance that covers our own error has `ours` <= 1, and `common` is what a
 check against this ground truth charges to us besides it.
+
+First, on the same pairs, each estimator's pair error and its drift over 1-s windows of
+consecutive pairs (their errors summed: first order).
 """
 import math
 import os
