@@ -78,15 +78,15 @@ def allowance_along(covariances, allowance):
     return out / len(covariances)
 
 
-def drift(stamps, errors, window_s=1.0):
-    """Over windows of consecutive pairs spanning window_s: the rms of the summed errors'
-    translation (m) and rotation (rad), to first order; and the number of windows."""
+def window_sums(stamps, errors, window_s=1.0):
+    """Each window's summed errors (first order), over windows of consecutive pairs spanning window_s."""
     spans = windows(stamps[:, 0], stamps[:, 1], window_s)
-    if not spans:
-        return math.nan, math.nan, 0
-    summed = np.array([errors[i:j + 1].sum(axis=0) for i, j in spans])
-    return (math.sqrt(np.mean(np.sum(summed[:, :3] ** 2, axis=1))), math.sqrt(np.mean(np.sum(summed[:, 3:] ** 2, axis=1))),
-            len(spans))
+    return np.array([errors[i:j + 1].sum(axis=0) for i, j in spans]) if spans else np.zeros((0, 6))
+
+
+def parts(mean_squares):
+    """Per-axis mean squares -> (translation, rotation): the rms of the sums over their axes."""
+    return tuple(math.sqrt(max(float(np.sum(mean_squares[axes])), 0.0)) for axes in (slice(0, 3), slice(3, 6)))
 
 
 def analyse(log_path, evaluation_path, peer_path):
@@ -94,8 +94,11 @@ def analyse(log_path, evaluation_path, peer_path):
     e_peer = e_ours - (xi - peer)  # the program wrote e_ours = xi - xi_gt
     per_axis = three_cornered_hat(e_ours, e_peer)
     along = three_cornered_hat(whitened(e_ours, cov), whitened(e_peer, cov))
-    return (len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, allowance),
-            (drift(stamps, e_ours), drift(stamps, e_peer)))
+    summed_ours, summed_peer = window_sums(stamps, e_ours), window_sums(stamps, e_peer)
+    windowed = three_cornered_hat(summed_ours, summed_peer) if len(summed_ours) else None
+    drifts = tuple(parts(np.mean(x * x, axis=0)) + (len(x),) if len(x) else (math.nan, math.nan, 0)
+                   for x in (summed_ours, summed_peer))
+    return len(xi), (e_ours, e_peer), per_axis, along, allowance_along(cov, allowance), drifts, windowed
 
 
 def rms_text(mean_square, unit_scale):
@@ -103,7 +106,7 @@ def rms_text(mean_square, unit_scale):
 
 
 def report(log_path, evaluation_path, peer_path):
-    n, (e_ours, e_peer), per_axis, along, allowance, drifts = analyse(log_path, evaluation_path, peer_path)
+    n, (e_ours, e_peer), per_axis, along, allowance, drifts, windowed = analyse(log_path, evaluation_path, peer_path)
     print(f"{n} pairs solved by both, with ground truth")
     print("on these pairs              pair rms: translation  rotation | over 1-s windows (first order): translation  rotation")
     for name, e, (t_rms, r_rms, count) in (("ours", e_ours, drifts[0]), ("peer", e_peer, drifts[1])):
@@ -111,6 +114,11 @@ def report(log_path, evaluation_path, peer_path):
         pair_r = math.degrees(math.sqrt(np.mean(np.sum(e[:, 3:] ** 2, axis=1))))
         print(f"  {name}                         {pair_t:6.2f} mm  {pair_r:7.3f} deg |"
               f"   {1e3 * t_rms:6.2f} mm  {math.degrees(r_rms):6.3f} deg  ({count} windows)")
+    if windowed is not None:
+        shares = [parts(m) for m in windowed]
+        print("the windows' drift, three-cornered hat (common / ours alone / peer alone; a part below 0 shows as 0): translation "
+              + " / ".join(f"{1e3 * t:.2f}" for t, _ in shares) + " mm, rotation "
+              + " / ".join(f"{math.degrees(r):.3f}" for _, r in shares) + " deg")
     print("rms per axis (mm, mrad):  ours-gt  peer-gt  ours-peer | common     ours     peer")
     for i, a in enumerate(AXES):
         d = [np.mean(x[:, i] ** 2) for x in (e_ours, e_peer, e_ours - e_peer)]
@@ -135,6 +143,7 @@ def self_test():
     true_common = np.array([0.8, 0.4, 0.3, 0.2, 0.1, 0.05])  # mean squares, whitened
     true_ours = np.full(6, 1.0)
     true_peer = np.array([3.0, 2.0, 1.0, 1.0, 0.5, 0.5])
+    generated = []  # each pair's common, our own and the peer's own error
     with tempfile.TemporaryDirectory() as tmp:
         paths = [os.path.join(tmp, name) for name in ("log.csv", "evaluation.csv", "peer.csv")]
         with open(paths[0], "w") as log, open(paths[1], "w") as ev, open(paths[2], "w") as peer:
@@ -148,15 +157,28 @@ def self_test():
                 in_basis = q * sd  # maps whitened draws into this pair's coordinates
                 truth = np.concatenate([rng.normal(0, 0.02, 3), rng.normal(0, 0.02, 3)])
                 common = in_basis @ rng.normal(0, np.sqrt(true_common))
-                ours = truth + common + in_basis @ rng.normal(0, np.sqrt(true_ours))
-                other = truth + common + in_basis @ rng.normal(0, np.sqrt(true_peer))
+                own = [in_basis @ rng.normal(0, np.sqrt(true_ours)), in_basis @ rng.normal(0, np.sqrt(true_peer))]
+                generated.append((common, own[0], own[1]))
+                ours = truth + common + own[0]
+                other = truth + common + own[1]
                 t = 1000 + k / 30
                 log.write(log_row(t - 1 / 30, t, ours, cov) + "\n")
                 ev.write(f"{t:.6f}," + ",".join(f"{x:.12g}" for x in ours - truth) + "\n")
                 peer.write(f"{t - 1 / 30:.6f},{t:.6f},1," + ",".join(f"{x:.12g}" for x in other) + "\n")
             peer.write(f"{t:.6f},{t + 1 / 30:.6f},0,nan,nan,nan,nan,nan,nan\n")  # a failed peer pair is skipped
-        count, (e_ours, e_peer), _, along, allowance, drifts = analyse(*paths)
+        count, (e_ours, e_peer), _, along, allowance, drifts, windowed = analyse(*paths)
     failures = []
+    # The hat over the windows: each part's window sums, as generated, within a quarter of the
+    # largest part (their cross terms over ~130 independent windows).
+    t = 1000 + np.arange(n) / 30
+    stamps = np.column_stack([t - 1 / 30, t])
+    for axes, part in ((slice(0, 3), "translation"), (slice(3, 6), "rotation")):
+        truth_parts = [np.mean(np.sum(window_sums(stamps, np.array([g[i] for g in generated]))[:, axes] ** 2, axis=1))
+                       for i in range(3)]
+        for name, got, want in zip(("common", "ours", "peer"), windowed, truth_parts):
+            got = float(np.sum(got[axes]))
+            if not abs(got - want) <= 0.25 * max(truth_parts):
+                failures.append(f"windows, {name} in {part}: mean square {got:.4g}, generated {want:.4g}")
     # Independent pairs: a window of L pairs sums to L times a pair's mean square; 30 pairs a
     # window of 1 s at 30 Hz (about 130 independent windows: within 20 %).
     for name, e, (t_rms, r_rms, windows_read) in (("ours", e_ours, drifts[0]), ("peer", e_peer, drifts[1])):
@@ -179,8 +201,8 @@ def self_test():
     if failures:
         print("peer_check self-test FAILED:\n  " + "\n  ".join(failures))
         return 1
-    print(f"peer_check self-test passed: {n} synthetic pairs, the common, own and peer mean squares and both "
-          "drifts over 1 s recovered")
+    print(f"peer_check self-test passed: {n} synthetic pairs, the common, own and peer mean squares, per pair and "
+          "over 1-s windows, and both drifts recovered")
     return 0
 
 
