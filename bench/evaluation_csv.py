@@ -114,6 +114,11 @@ def windows(t_prev, t_curr, window_s):
     return out
 
 
+def summed_over(errors, spans):
+    """Each window's errors summed (first order: small rotations per window), from windows()."""
+    return np.array([errors[i:j + 1].sum(axis=0) for i, j in spans]) if spans else np.zeros((0, errors.shape[1]))
+
+
 def log_evaluation_and_option(args, flag, usage):
     """A bench script's command line, LOG.csv EVALUATION.csv [FLAG VALUE]: the two paths and
     VALUE's text (None without the flag); anything else exits with the usage."""

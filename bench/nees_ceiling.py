@@ -26,7 +26,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row, read_evaluation, read_pairs, windows
+from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row, read_evaluation, read_pairs, summed_over, windows
 
 
 def allowance_matrix(allowance):
@@ -54,7 +54,7 @@ def analyse(log_path, evaluation_path, allowance=None, window_s=1.0):
     allowance = allowance or stated
     t_prev, t_curr, _, error = read_pairs(log_path, evaluation_path)
     spans = windows(t_prev, t_curr, window_s)
-    summed = np.array([error[i:j + 1].sum(axis=0) for i, j in spans]) if spans else np.zeros((0, 6))
+    summed = summed_over(error, spans)
     rows = []
     for name, errors, column in (("pairs", error, "nees"), (f"{window_s:g}-s windows", summed, "window_nees")):
         reported = evaluation.get(column)

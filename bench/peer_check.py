@@ -32,7 +32,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key, windows
+from evaluation_csv import AXES, LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key, summed_over, windows
 
 
 def read_inputs(log_path, evaluation_path, peer_path):
@@ -79,9 +79,8 @@ def allowance_along(covariances, allowance):
 
 
 def window_sums(stamps, errors, window_s=1.0):
-    """Each window's summed errors (first order), over windows of consecutive pairs spanning window_s."""
-    spans = windows(stamps[:, 0], stamps[:, 1], window_s)
-    return np.array([errors[i:j + 1].sum(axis=0) for i, j in spans]) if spans else np.zeros((0, 6))
+    """Each window's summed errors, over windows of consecutive pairs spanning window_s."""
+    return summed_over(errors, windows(stamps[:, 0], stamps[:, 1], window_s))
 
 
 def parts(mean_squares):

@@ -25,7 +25,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row, read_pairs, windows
+from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row, read_pairs, summed_over, windows
 
 
 def analyse(log_path, evaluation_path, window_s=1.0):
@@ -35,7 +35,7 @@ def analyse(log_path, evaluation_path, window_s=1.0):
     spans = windows(t_prev, t_curr, window_s)
     if len(spans) < 3:
         sys.exit(f"window_delay: fewer than 3 windows of {window_s} s of consecutive pairs")
-    summed = np.array([error[i:j + 1].sum(axis=0) for i, j in spans])
+    summed = summed_over(error, spans)
     # The rates at the window's two end stamps, from its two outer pairs' mean rates (theirs are
     # half a pair inside), carried out by half a pair at the rate's own change.
     change = np.array([(1.5 * rate[j] - 0.5 * rate[j - 1]) - (1.5 * rate[i] - 0.5 * rate[i + 1]) for i, j in spans])
