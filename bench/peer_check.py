@@ -109,9 +109,8 @@ def report(log_path, evaluation_path, peer_path):
     print(f"{n} pairs solved by both, with ground truth")
     print("on these pairs              pair rms: translation  rotation | over 1-s windows (first order): translation  rotation")
     for name, e, (t_rms, r_rms, count) in (("ours", e_ours, drifts[0]), ("peer", e_peer, drifts[1])):
-        pair_t = 1e3 * math.sqrt(np.mean(np.sum(e[:, :3] ** 2, axis=1)))
-        pair_r = math.degrees(math.sqrt(np.mean(np.sum(e[:, 3:] ** 2, axis=1))))
-        print(f"  {name}                         {pair_t:6.2f} mm  {pair_r:7.3f} deg |"
+        pair_t, pair_r = parts(np.mean(e * e, axis=0))
+        print(f"  {name}                         {1e3 * pair_t:6.2f} mm  {math.degrees(pair_r):7.3f} deg |"
               f"   {1e3 * t_rms:6.2f} mm  {math.degrees(r_rms):6.3f} deg  ({count} windows)")
     if windowed is not None:
         shares = [parts(m) for m in windowed]
