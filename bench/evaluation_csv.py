@@ -34,6 +34,11 @@ def read_evaluation(path):
     return {name: data[:, i] for i, name in enumerate(header)}, allowance
 
 
+def allowance_variances(allowance):
+    """The per-axis variances (tx ty tz rx ry rz) of a ground-truth allowance (metres, radians)."""
+    return np.array([allowance[0] ** 2] * 3 + [allowance[1] ** 2] * 3)
+
+
 def stamp_key(t):
     """A pair's stamp as a join key: the files write their stamps to the microsecond."""
     return round(float(t) * 1e6)

@@ -26,18 +26,13 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row, read_evaluation, read_pairs, summed_over, windows
-
-
-def allowance_matrix(allowance):
-    t, r = allowance
-    return np.diag([t * t] * 3 + [r * r] * 3)
+from evaluation_csv import AXES, LOG_HEADER, allowance_variances, log_evaluation_and_option, log_row, read_evaluation, read_pairs, summed_over, windows
 
 
 def ceilings(errors, allowance):
     """Mean NEES of a zero covariance (total, translation's and rotation's shares) and of one
     consistent covariance S = mean e e^T, both with the allowance added."""
-    a = allowance_matrix(allowance)
+    a = np.diag(allowance_variances(allowance))
     if not np.all(np.diag(a) > 0):
         sys.exit("nees_ceiling: the allowance must be above 0 in translation and rotation")
     whitened = errors ** 2 / np.diag(a)

@@ -32,7 +32,7 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, log_row, read_evaluation, read_log, read_rows, stamp_key, summed_over, windows
+from evaluation_csv import AXES, LOG_HEADER, allowance_variances, log_row, read_evaluation, read_log, read_rows, stamp_key, summed_over, windows
 
 
 def read_inputs(log_path, evaluation_path, peer_path):
@@ -70,7 +70,7 @@ def whitened(vectors, covariances):
 
 def allowance_along(covariances, allowance):
     """Mean square of the allowance's sd along each whitened eigen-direction, smallest first."""
-    variance = np.array([allowance[0] ** 2] * 3 + [allowance[1] ** 2] * 3)
+    variance = allowance_variances(allowance)
     out = np.zeros(6)
     for cov in covariances:
         lam, u = np.linalg.eigh(cov)
