@@ -1,12 +1,19 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <random>
 #include <vector>
 
+#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
+#include "runnable_kernel_sets.hpp"
 
 namespace rgbdo {
 namespace {
@@ -320,6 +327,121 @@ TEST(SensorEstimates, ADepthLagASmoothPathCannotShowStaysAtItsPrior) {
   std::mt19937 rng(11);
   // THEN it reads near the prior's 0, not a lag made of noise
   EXPECT_LT(std::abs(lag_estimate_from(0.010, 0.003, 150, rng).lag_s()), 0.003);
+}
+
+// A bundled (Kinect) frame's depth on the alignment's grid, through fr1's lens model.
+DepthCloud bundled_cloud(int index) {
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  const RgbdFrame frame = load_tum_frame(seq.frames[static_cast<size_t>(index)], config.depth.units_per_m, 640, 480);
+  DepthCloud cloud;
+  DepthCloudBuilder(config.camera, config.depth, config.refinement).build(frame.depth_m, cloud);
+  return cloud;
+}
+
+// The association kernel's input for the grid row `row` of `curr` against `prev`, taking
+// `n` points every `step` from column `first`, carried by T.
+simd::AssociateInput associate_input(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T, int row,
+                                     int first, int step, int n) {
+  simd::AssociateInput in{};
+  in.first_index = row * curr.cols + first;
+  in.curr = curr.point[static_cast<size_t>(in.first_index)].data();
+  in.n = n;
+  in.step = step;
+  in.prev_point = prev.point.front().data();
+  in.prev_normal = prev.normal.front().data();
+  in.cols = prev.cols;
+  in.rows = prev.rows;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) in.r[3 * r + c] = static_cast<float>(T.linear()(r, c));
+    in.t[r] = static_cast<float>(T.translation()(r));
+  }
+  // fr1's intrinsics on the grid, as DepthAligner puts them
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  const double stride = config.refinement.stride_px;
+  in.fx = static_cast<float>(config.camera.fx / stride), in.fy = static_cast<float>(config.camera.fy / stride);
+  in.cx = static_cast<float>((config.camera.cx - std::floor(stride / 2)) / stride + 0.5);
+  in.cy = static_cast<float>((config.camera.cy - std::floor(stride / 2)) / stride + 0.5);
+  in.max_d2 = 0.05f * 0.05f;
+  in.coeff = 1.425e-3f;
+  in.floor2 = 1e-8f;
+  return in;
+}
+
+TEST(AssociateKernels, TwinsAreBitExactOnRealDepthAtManyMotions) {
+  // GIVEN two bundled Kinect frames' clouds (holes, depth edges, the sensor's noise), some of
+  // the current points made unreadable (NaN, infinite), and motions from none to 0.2 m and
+  // 0.2 rad a component, taking every point and every other, whole rows and stretches ending
+  // anywhere
+  const DepthCloud prev = bundled_cloud(0);
+  DepthCloud curr = bundled_cloud(1);
+  curr.point[1234] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  curr.point[2345].z() = std::numeric_limits<float>::infinity();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto sets = twins_of_reference(&simd::KernelSet::associate);
+  const size_t room = static_cast<size_t>(curr.cols) + 8;
+  std::vector<simd::Association> expected(room), got(room);
+  long compared = 0, associations = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const double s = std::array{0.0, 0.005, 0.02, 0.2}[static_cast<size_t>(trial % 4)];
+    const Eigen::Isometry3d T = motion(s * u(rng), s * u(rng), s * u(rng), s * u(rng), s * u(rng), s * u(rng));
+    for (int row = 0; row < curr.rows; ++row) {
+      const int step = 1 + (row + trial) % 2, first = trial % 3 == 0 ? row % 2 : static_cast<int>(rng() % 7);
+      const int most = (curr.cols - first + step - 1) / step;
+      const int n = row % 4 == 0 ? most : static_cast<int>(rng() % static_cast<unsigned>(most + 1));
+      simd::AssociateInput in = associate_input(prev, curr, T, row, first, step, n);
+      if (trial % 5 == 4) in.max_d2 = 1e-4f;  // most associations refused by distance
+      std::memset(expected.data(), 0xAB, room * sizeof(simd::Association));
+      const int want = simd::associate_scalar(in, expected.data());
+      associations += want;
+      for (const auto* set : sets) {
+        std::memset(got.data(), 0xAB, room * sizeof(simd::Association));  // what lies past the count must stay so
+        const int count = set->associate(in, got.data());
+        ASSERT_EQ(count, want) << set->name << ", trial " << trial << ", row " << row;
+        ASSERT_EQ(std::memcmp(got.data(), expected.data(), room * sizeof(simd::Association)), 0)
+            << set->name << ", trial " << trial << ", row " << row;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(associations, 60 * 500) << "the motions associated too few points to compare";
+  if (sets.empty()) GTEST_SKIP() << "no kernel set of this build has a twin of the reference";
+  EXPECT_GT(compared, 0);
+}
+
+TEST(AssociateKernels, AtRestEveryPointWithANormalIsItsOwnAssociationWithNoResidual) {
+  // GIVEN one bundled frame's cloud aligned to itself at the identity
+  const DepthCloud cloud = bundled_cloud(0);
+  for (const auto* set : sets_with_own(&simd::KernelSet::associate)) {
+    long with_normal = 0, found = 0;
+    std::vector<simd::Association> out(static_cast<size_t>(cloud.cols));
+    for (int row = 0; row < cloud.rows; ++row) {
+      const simd::AssociateInput in = associate_input(cloud, cloud, Eigen::Isometry3d::Identity(), row, 0, 1, cloud.cols);
+      const int n = set->associate(in, out.data());
+      for (int k = 0; k < n; ++k) {
+        const simd::Association& a = out[static_cast<size_t>(k)];
+        // THEN each point lands on its own sample, at zero residual, with the weight of two
+        // readings of its depth and the normal as the translation's Jacobian
+        ASSERT_EQ(a.prev_index, a.curr_index) << set->name;
+        EXPECT_EQ(a.r, 0.0f) << set->name;
+        const Eigen::Vector3f& p = cloud.point[static_cast<size_t>(a.curr_index)];
+        const Eigen::Vector3f& nrm = cloud.normal[static_cast<size_t>(a.curr_index)];
+        const double sz = 1.425e-3 * p.z() * p.z();
+        EXPECT_NEAR(a.w, 1 / (2 * sz * sz + 1e-8), 1e-5 / (2 * sz * sz + 1e-8)) << set->name;
+        EXPECT_NEAR(a.j[0], nrm.x(), 1e-6) << set->name;
+        EXPECT_NEAR(a.j[2], nrm.z(), 1e-6) << set->name;
+        EXPECT_NEAR(a.j[3], p.y() * nrm.z() - p.z() * nrm.y(), 1e-5) << set->name;
+      }
+      found += n;
+      // A point is associated at rest when it has a normal (its own sample's): it projects
+      // back onto its own grid place.
+      for (int i = 0; i < cloud.cols; ++i)
+        with_normal += cloud.normal[static_cast<size_t>(row * cloud.cols + i)] != Eigen::Vector3f::Zero();
+    }
+    EXPECT_EQ(found, with_normal) << set->name;
+    EXPECT_GT(found, 2000) << set->name;
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 // agree with IEEE division and sqrt to a few ulp (tested against the reference at 2e-6).
 #include <arm_neon.h>
 
+#include "neon_compare.hpp"
 #include "perturb_reference.hpp"
 
 namespace rgbdo::simd {
@@ -37,7 +38,7 @@ inline float32x4_t sqrt_non_negative(float32x4_t x) {
   float32x4_t r = vrsqrteq_f32(x);
   r = vmulq_f32(r, vrsqrtsq_f32(vmulq_f32(x, r), r));
   r = vmulq_f32(r, vrsqrtsq_f32(vmulq_f32(x, r), r));
-  return vbslq_f32(vcgtq_f32(x, vdupq_n_f32(0.0f)), vmulq_f32(x, r), vdupq_n_f32(0.0f));
+  return vbslq_f32(neon::greater(x, vdupq_n_f32(0.0f)), vmulq_f32(x, r), vdupq_n_f32(0.0f));
 }
 
 inline float32x4_t to_unit(uint32x4_t x) {
@@ -51,7 +52,7 @@ inline float32x4_t log_unit(float32x4_t u) {
   const uint32x4_t bits = vreinterpretq_u32_f32(u);
   float32x4_t e = vcvtq_f32_s32(vsubq_s32(vreinterpretq_s32_u32(vshrq_n_u32(bits, 23)), vdupq_n_s32(127)));
   float32x4_t m = vreinterpretq_f32_u32(vorrq_u32(vandq_u32(bits, vdupq_n_u32(0x007FFFFF)), vdupq_n_u32(0x3F800000)));
-  const uint32x4_t fold = vcgtq_f32(m, vdupq_n_f32(1.41421356f));
+  const uint32x4_t fold = neon::greater(m, vdupq_n_f32(1.41421356f));
   m = vbslq_f32(fold, vmulq_f32(m, vdupq_n_f32(0.5f)), m);
   e = vbslq_f32(fold, vaddq_f32(e, vdupq_n_f32(1.0f)), e);
   const float32x4_t one = vdupq_n_f32(1.0f);
@@ -66,8 +67,8 @@ inline float32x4_t log_unit(float32x4_t u) {
 }
 
 inline void sincos_turns(float32x4_t t, float32x4_t& sin_out, float32x4_t& cos_out) {
-  const uint32x4_t upper = vcgtq_f32(t, vdupq_n_f32(0.25f));
-  const uint32x4_t lower = vcltq_f32(t, vdupq_n_f32(-0.25f));
+  const uint32x4_t upper = neon::greater(t, vdupq_n_f32(0.25f));
+  const uint32x4_t lower = neon::less(t, vdupq_n_f32(-0.25f));
   const float32x4_t sign = vbslq_f32(vorrq_u32(upper, lower), vdupq_n_f32(-1.0f), vdupq_n_f32(1.0f));
   t = vbslq_f32(upper, vsubq_f32(vdupq_n_f32(0.5f), t), t);
   t = vbslq_f32(lower, vsubq_f32(vdupq_n_f32(-0.5f), t), t);

@@ -2,6 +2,7 @@
 // operations in the same order (no fused multiply-add), the same reduction tree.
 #include <arm_neon.h>
 
+#include "neon_compare.hpp"
 #include "rgbd_odometry/simd/score.hpp"
 
 namespace rgbdo::simd {
@@ -21,7 +22,7 @@ void score_rigid_neon(const RigidScoreInput& in, int& count, float& cost) {
     const float32x4_t ey = vsubq_f32(py, row(1, cx, cy, cz));
     const float32x4_t ez = vsubq_f32(pz, row(2, cx, cy, cz));
     const float32x4_t e = vaddq_f32(vaddq_f32(vmulq_f32(ex, ex), vmulq_f32(ey, ey)), vmulq_f32(ez, ez));
-    const uint32x4_t inside = vandq_u32(vcltq_f32(e, thr), valid);
+    const uint32x4_t inside = vandq_u32(neon::less(e, thr), valid);
     const float32x4_t term = vreinterpretq_f32_u32(vandq_u32(vreinterpretq_u32_f32(vbslq_f32(inside, e, thr)), valid));
     lane_cost[h] = vaddq_f32(lane_cost[h], term);
     lane_count[h] = vsubq_u32(lane_count[h], inside);  // true lanes are all ones (-1)

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 #include <opencv2/calib3d.hpp>
 
 namespace rgbdo {
@@ -118,18 +119,8 @@ DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& r
       grid_fy_(static_cast<float>(camera.fy / refinement.stride_px)),
       // + 0.5 so that truncation rounds to the nearest grid sample
       grid_cx_(static_cast<float>((camera.cx - refinement.stride_px / 2) / refinement.stride_px + 0.5)),
-      grid_cy_(static_cast<float>((camera.cy - refinement.stride_px / 2) / refinement.stride_px + 0.5)) {
-}
-
-int DepthAligner::project(const Eigen::Vector3f& q, int cols, int rows) const {
-  if (!(q.z() > 0)) return -1;
-  // The clouds' grids are pinhole (DepthCloudBuilder): no lens model here. Rounded to the
-  // nearest sample by truncating from + 0.5 (grid_cx_, grid_cy_).
-  const float iz = 1.0f / q.z();
-  const float gi = q.x() * iz * grid_fx_ + grid_cx_, gj = q.y() * iz * grid_fy_ + grid_cy_;
-  if (!(gi >= 0 && gj >= 0 && gi < static_cast<float>(cols) && gj < static_cast<float>(rows))) return -1;
-  return static_cast<int>(gj) * cols + static_cast<int>(gi);
-}
+      grid_cy_(static_cast<float>((camera.cy - refinement.stride_px / 2) / refinement.stride_px + 0.5)),
+      associate_(simd::active_kernels().associate) {}
 
 void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed,
                          DepthAlignment& out) {
@@ -140,55 +131,54 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   cell_gradient_.resize(static_cast<size_t>(cells_x * cells_y));
   cell_count_.resize(cell_gradient_.size());
   const size_t capacity = curr.point.size();
-  if (terms_.capacity() < capacity) terms_.reserve(capacity), scaled_.reserve(capacity);
+  if (terms_.size() < capacity) terms_.resize(capacity), term_cells_.resize(capacity), scaled_.reserve(capacity);
+  term_count_ = 0;
 
   Eigen::Isometry3d T = seed;
   Matrix6d H;
   double s2 = 0;  // the last iteration's a-posteriori variance factor
   int used = 0;
-  const auto max_d2 = static_cast<float>(config_.max_distance_m * config_.max_distance_m);
-  const auto coeff = static_cast<float>(depth_noise_coeff_);
-  const auto floor2 = static_cast<float>(2 * quantum_sigma_m_ * quantum_sigma_m_);
+  // The association kernel's constants; the clouds' grids are pinhole (DepthCloudBuilder): no
+  // lens model, the projection rounded to the nearest sample by truncating from + 0.5.
+  simd::AssociateInput in{};
+  in.prev_point = prev.point.front().data();
+  in.prev_normal = prev.normal.front().data();
+  in.cols = prev.cols;
+  in.rows = prev.rows;
+  in.fx = grid_fx_, in.fy = grid_fy_, in.cx = grid_cx_, in.cy = grid_cy_;
+  in.max_d2 = static_cast<float>(config_.max_distance_m * config_.max_distance_m);
+  in.coeff = static_cast<float>(depth_noise_coeff_);
+  in.floor2 = static_cast<float>(2 * quantum_sigma_m_ * quantum_sigma_m_);
   for (int it = 0; it < config_.iterations; ++it) {
     // The associations and their residuals at T, in single precision: a few thousand points,
     // each to well below the depth's own resolution (the sums are kept in double).
-    terms_.clear();
-    const Eigen::Matrix3f R = T.linear().cast<float>();
-    const Eigen::Vector3f t = T.translation().cast<float>();
+    for (int row = 0; row < 3; ++row) {
+      for (int col = 0; col < 3; ++col) in.r[3 * row + col] = static_cast<float>(T.linear()(row, col));
+      in.t[row] = static_cast<float>(T.translation()(row));
+    }
     // Every step but the last takes every other point (a checkerboard, alternating): they only
     // have to come near; the last one, which the covariance is computed at, takes them all.
     const bool last = it == config_.iterations - 1;
-    const int step_i = last ? 1 : 2;
-    for (int j = 0; j < curr.rows; ++j)
-      for (int i = last ? 0 : ((j + it) & 1); i < curr.cols; i += step_i) {
-        const Eigen::Vector3f& p = curr.point[static_cast<size_t>(j * curr.cols + i)];
-        if (p.z() == 0) continue;
-        const Eigen::Vector3f q = R * p + t;
-        const int k = project(q, prev.cols, prev.rows);
-        if (k < 0) continue;
-        const Eigen::Vector3f& n = prev.normal[static_cast<size_t>(k)];
-        if (n.z() == 0 && n.x() == 0 && n.y() == 0) continue;
-        const Eigen::Vector3f& target = prev.point[static_cast<size_t>(k)];
-        const Eigen::Vector3f d = q - target;
-        if (d.squaredNorm() > max_d2) continue;
-        const float sz_c = coeff * p.z() * p.z(), sz_p = coeff * target.z() * target.z();
-        Term term;
-        term.w = 1.0f / (sz_c * sz_c + sz_p * sz_p + floor2);
-        term.r = n.dot(d);
-        const Eigen::Vector3f m = R.transpose() * n;  // the normal in the current frame
-        const Eigen::Vector3f pm = p.cross(m);
-        term.J = {m.x(), m.y(), m.z(), pm.x(), pm.y(), pm.z()};
-        term.cell = (j / cell_grid) * cells_x + i / cell_grid;
-        term.curr_index = j * curr.cols + i;
-        term.prev_index = k;
-        terms_.push_back(term);
-      }
-    if (static_cast<int>(terms_.size()) < config_.min_points) return;
+    in.step = last ? 1 : 2;
+    term_count_ = 0;
+    for (int j = 0; j < curr.rows; ++j) {
+      const int first = last ? 0 : ((j + it) & 1);
+      in.first_index = j * curr.cols + first;
+      in.curr = curr.point[static_cast<size_t>(in.first_index)].data();
+      in.n = (curr.cols - first + in.step - 1) / in.step;
+      const auto found = static_cast<size_t>(associate_(in, terms_.data() + term_count_));
+      const int cell_row = (j / cell_grid) * cells_x;
+      for (size_t k = term_count_; k < term_count_ + found; ++k)
+        term_cells_[k] = cell_row + (terms_[k].curr_index - j * curr.cols) / cell_grid;
+      term_count_ += found;
+    }
+    if (static_cast<int>(term_count_) < config_.min_points) return;
+    const std::span<const simd::Association> terms(terms_.data(), term_count_);
     // Tukey's biweight on the normalised residuals, its scale their median absolute deviation
     // (over every 4th association: plenty for a median): associations across a crease or an
     // occlusion edge weigh nothing, whatever the sensor's noise.
     scaled_.clear();
-    for (size_t k = 0; k < terms_.size(); k += 4) scaled_.push_back(terms_[k].r * terms_[k].r * terms_[k].w);
+    for (size_t k = 0; k < terms.size(); k += 4) scaled_.push_back(terms[k].r * terms[k].r * terms[k].w);
     const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
     std::nth_element(scaled_.begin(), mid, scaled_.end());
     const double scale2 = 1.4826 * 1.4826 * static_cast<double>(*mid);
@@ -203,22 +193,24 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
     // No cutoff below the depth's quantisation: exact depth has residuals of rounding only,
     // whose median says nothing of which associations are wrong.
     const double floor_r2 = 4.685 * 4.685 * quantum_sigma_m_ * quantum_sigma_m_;
-    for (const Term& term : terms_) {
+    for (size_t a = 0; a < terms.size(); ++a) {
+      const simd::Association& term = terms[a];
       const double r2 = static_cast<double>(term.r) * term.r;
       const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
       if (u2 >= 1) continue;
       const double robust = (1 - u2) * (1 - u2);
       const double w = robust * term.w;
       Vector6d J;
-      for (int e = 0; e < 6; ++e) J(e) = term.J[static_cast<size_t>(e)];
+      for (int e = 0; e < 6; ++e) J(e) = term.j[e];
       for (int row = 0, at = 0; row < 6; ++row)
         for (int col = 0; col <= row; ++col, ++at) h[static_cast<size_t>(at)] += w * J(row) * J(col);
       const double wr = w * term.r;
       b += wr * J;
       sum_wr2 += wr * term.r;
       sum_weight += robust;
-      cell_gradient_[static_cast<size_t>(term.cell)] += wr * J;
-      ++cell_count_[static_cast<size_t>(term.cell)];
+      const auto cell = static_cast<size_t>(term_cells_[a]);
+      cell_gradient_[cell] += wr * J;
+      ++cell_count_[cell];
       ++used;
     }
     if (used < config_.min_points) return;
@@ -278,8 +270,8 @@ double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthClo
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const double rounding2 = 2 * quantum_sigma_m_ * quantum_sigma_m_;
   scaled_.clear();
-  for (size_t k = 0; k < terms_.size(); k += 4) {
-    const Term& term = terms_[k];
+  for (size_t k = 0; k < term_count_; k += 4) {
+    const simd::Association& term = terms_[k];
     const Eigen::Vector3f& p = curr.point[static_cast<size_t>(term.curr_index)];
     const Eigen::Vector3f& target = prev.point[static_cast<size_t>(term.prev_index)];
     const Eigen::Vector3f& n = prev.normal[static_cast<size_t>(term.prev_index)];

@@ -25,6 +25,7 @@
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/pipeline/learnt_constant.hpp"
+#include "rgbd_odometry/simd/kernels.hpp"
 
 namespace rgbdo {
 
@@ -77,9 +78,6 @@ class DepthAligner {
   void align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed, DepthAlignment& out);
 
  private:
-  // Grid index in prev of a point in prev's camera frame; -1 outside.
-  int project(const Eigen::Vector3f& q, int cols, int rows) const;
-
   RefinementConfig config_;
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
@@ -88,13 +86,11 @@ class DepthAligner {
   // noise geometry (both depths along their rays, seen along the normal).
   double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
 
-  struct Term {  // one association: residual along the normal, its weight and Jacobian
-    float r, w;
-    std::array<float, 6> J;
-    int cell;
-    int curr_index, prev_index;  // the two grid samples associated
-  };
-  std::vector<Term> terms_;
+  simd::AssociateFn associate_;  // the active kernel set's
+  // The associations at the last linearisation (the first term_count_) and each one's image cell.
+  std::vector<simd::Association> terms_;
+  std::vector<int> term_cells_;
+  size_t term_count_ = 0;
   std::vector<float> scaled_;
   std::vector<Vector6d> cell_gradient_;
   std::vector<int> cell_count_;

@@ -8,6 +8,7 @@
 #include <span>
 #include <string>
 
+#include "rgbd_odometry/simd/associate.hpp"
 #include "rgbd_odometry/simd/fast.hpp"
 #include "rgbd_odometry/simd/image.hpp"
 #include "rgbd_odometry/simd/nearest_two.hpp"
@@ -41,6 +42,7 @@ using TrackSample8Fn = void (*)(const std::uint8_t* top_left, std::ptrdiff_t str
                                 std::int16_t* out);
 using TrackSums8x8Fn = void (*)(const std::int16_t* sampled, const std::int16_t* templ, const std::int16_t* gx,
                                const std::int16_t* gy, std::int32_t* sums);
+using AssociateFn = int (*)(const AssociateInput& in, Association* out);
 using DiscMomentsFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, std::int32_t* m10, std::int32_t* m01);
 
 struct KernelSet {
@@ -60,6 +62,7 @@ struct KernelSet {
   DepthToMetresRowFn depth_to_metres_row;
   TrackSample8Fn track_sample8;
   TrackSums8x8Fn track_sums8x8;
+  AssociateFn associate;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.
