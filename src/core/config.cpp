@@ -80,6 +80,7 @@ std::vector<Param> param_table(Config& c) {
       {"refinement.sigma_scale_max", "", "the factors' ceiling: beyond it the sensor's depth adds nothing", &c.refinement.sigma_scale_max, 1, 1e9},
       {"refinement.max_sigma_scale_fused", "", "the alignment is fused only while both learnt factors are at most this: beyond, its errors are ones its residuals cannot see", &c.refinement.max_sigma_scale_fused, 1, 1e9},
       {"refinement.max_depth_lag_s", "s", "the depth's capture lag behind the colour, learnt from the depth alignment against the features and reported, at most this much", &c.refinement.max_depth_lag_s, 0, 1},
+      {"refinement.max_depth_lag_fused_s", "s", "the alignment is fused only while the depth's learnt lag behind the colour is at most this either way: a depth taken at another instant measures another motion", &c.refinement.max_depth_lag_fused_s, 0, 1},
       {"sensor.fps", "Hz", "live sensor frame rate", &c.sensor.fps, 1, 120},
       {"sensor.registration", "", "hardware depth-to-colour registration", &c.sensor.registration},
       {"sensor.frame_timeout_ms", "ms", "no frame this long: the sensor is reported lost", &c.sensor.frame_timeout_ms, 100, 600000},

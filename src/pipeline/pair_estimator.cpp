@@ -282,6 +282,12 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   if (std::max(alignment_trust_.translation_scale(), alignment_trust_.rotation_scale()) >
       config_.refinement.max_sigma_scale_fused)
     return 0;
+  // Nor while the depth is learnt to lag the colour: the alignment then measures the motion of
+  // another interval, which the lag is too noisy to carry pair by pair (above). The factors
+  // cannot be relied on to keep it out: where the features are weak their own error fills the
+  // difference, and the factors fall to their floor (TUM fr1 at 200-300 features a frame:
+  // fused, pair NEES 9-16 and 1-s rotation drift up by a third; src/pipeline/README.md).
+  if (std::abs(depth_lag_.lag_s()) > config_.refinement.max_depth_lag_fused_s) return 0;
   Eigen::Isometry3d fused;
   Matrix6d fused_cov;
   if (!fuse_estimates(fit_.T_prev_curr, feature_cov, T_depth, depth_cov, alignment_.basis, alignment_.constrained,

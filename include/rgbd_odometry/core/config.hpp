@@ -91,6 +91,9 @@ struct RefinementConfig {
   // The depth's lag behind the colour (beyond the stamps), learnt from the two estimates and
   // reported (DepthLagEstimate), at most this much either way, seconds.
   double max_depth_lag_s = 0.1;
+  // Fused only while that learnt lag is at most this either way, seconds (pair_estimator.cpp
+  // says why).
+  double max_depth_lag_fused_s = 0.015;
 };
 
 inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "paper"};
