@@ -339,10 +339,16 @@ DepthCloud bundled_cloud(int index) {
   return cloud;
 }
 
+// fr1's intrinsics on the alignment's grid.
+std::array<float, 4> fr1_grid_intrinsics() {
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  return grid_intrinsics(config.camera, config.refinement.stride_px);
+}
+
 // The association kernel's input for the grid row `row` of `curr` against `prev`, taking
 // `n` points every `step` from column `first`, carried by T.
-simd::AssociateInput associate_input(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T, int row,
-                                     int first, int step, int n) {
+simd::AssociateInput associate_input(const DepthCloud& prev, const DepthCloud& curr, const std::array<float, 4>& grid,
+                                     const Eigen::Isometry3d& T, int row, int first, int step, int n) {
   simd::AssociateInput in{};
   in.first_index = row * curr.cols + first;
   in.curr = curr.point[static_cast<size_t>(in.first_index)].data();
@@ -356,12 +362,7 @@ simd::AssociateInput associate_input(const DepthCloud& prev, const DepthCloud& c
     for (int c = 0; c < 3; ++c) in.r[3 * r + c] = static_cast<float>(T.linear()(r, c));
     in.t[r] = static_cast<float>(T.translation()(r));
   }
-  // fr1's intrinsics on the grid, as DepthAligner puts them
-  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
-  const double stride = config.refinement.stride_px;
-  in.fx = static_cast<float>(config.camera.fx / stride), in.fy = static_cast<float>(config.camera.fy / stride);
-  in.cx = static_cast<float>((config.camera.cx - std::floor(stride / 2)) / stride + 0.5);
-  in.cy = static_cast<float>((config.camera.cy - std::floor(stride / 2)) / stride + 0.5);
+  in.fx = grid[0], in.fy = grid[1], in.cx = grid[2], in.cy = grid[3];
   in.max_d2 = 0.05f * 0.05f;
   in.coeff = 1.425e-3f;
   in.floor2 = 1e-8f;
@@ -380,6 +381,7 @@ TEST(AssociateKernels, TwinsAreBitExactOnRealDepthAtManyMotions) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   const auto sets = twins_of_reference(&simd::KernelSet::associate);
+  const std::array<float, 4> grid = fr1_grid_intrinsics();
   const size_t room = static_cast<size_t>(curr.cols) + 8;
   std::vector<simd::Association> expected(room), got(room);
   long compared = 0, associations = 0;
@@ -390,7 +392,7 @@ TEST(AssociateKernels, TwinsAreBitExactOnRealDepthAtManyMotions) {
       const int step = 1 + (row + trial) % 2, first = trial % 3 == 0 ? row % 2 : static_cast<int>(rng() % 7);
       const int most = (curr.cols - first + step - 1) / step;
       const int n = row % 4 == 0 ? most : static_cast<int>(rng() % static_cast<unsigned>(most + 1));
-      simd::AssociateInput in = associate_input(prev, curr, T, row, first, step, n);
+      simd::AssociateInput in = associate_input(prev, curr, grid, T, row, first, step, n);
       if (trial % 5 == 4) in.max_d2 = 1e-4f;  // most associations refused by distance
       std::memset(expected.data(), 0xAB, room * sizeof(simd::Association));
       const int want = simd::associate_scalar(in, expected.data());
@@ -413,11 +415,13 @@ TEST(AssociateKernels, TwinsAreBitExactOnRealDepthAtManyMotions) {
 TEST(AssociateKernels, AtRestEveryPointWithANormalIsItsOwnAssociationWithNoResidual) {
   // GIVEN one bundled frame's cloud aligned to itself at the identity
   const DepthCloud cloud = bundled_cloud(0);
+  const std::array<float, 4> grid = fr1_grid_intrinsics();
   for (const auto* set : sets_with_own(&simd::KernelSet::associate)) {
     long with_normal = 0, found = 0;
     std::vector<simd::Association> out(static_cast<size_t>(cloud.cols));
     for (int row = 0; row < cloud.rows; ++row) {
-      const simd::AssociateInput in = associate_input(cloud, cloud, Eigen::Isometry3d::Identity(), row, 0, 1, cloud.cols);
+      const simd::AssociateInput in =
+          associate_input(cloud, cloud, grid, Eigen::Isometry3d::Identity(), row, 0, 1, cloud.cols);
       const int n = set->associate(in, out.data());
       for (int k = 0; k < n; ++k) {
         const simd::Association& a = out[static_cast<size_t>(k)];

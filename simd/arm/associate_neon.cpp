@@ -4,8 +4,8 @@
 // Newton steps is not IEEE's quotient: the two divisions (1 / z, the weight) are done lane by
 // lane on VFP, whose registers the NEON ones share. The previous grid's normals and points are
 // gathered and the associations written lane by lane by single structure loads and stores
-// (VLD3 / VST4 to one lane); the compares are neon_compare.hpp's. NEON flushes denormal floats to zero, which no point, normal or
-// weight of a depth map in metres comes near.
+// (VLD3 / VST4 to one lane); the compares are neon_compare.hpp's. NEON flushes denormal floats
+// to zero, which no point, normal or weight of a depth map in metres comes near.
 #include <arm_neon.h>
 
 #include "neon_compare.hpp"
@@ -95,7 +95,8 @@ int associate_neon(const AssociateInput& in, Association* out) {
     if (!any(valid)) continue;
     // Truncation, as the reference's cast (both are >= 0 in a valid lane); sample 0 elsewhere,
     // read and never used.
-    const int32x4_t k = vandq_s32(vmlaq_n_s32(vcvtq_s32_f32(gi), vcvtq_s32_f32(gj), in.cols), vreinterpretq_s32_u32(valid));
+    const int32x4_t k =
+        vandq_s32(vmlaq_n_s32(vcvtq_s32_f32(gi), vcvtq_s32_f32(gj), in.cols), vreinterpretq_s32_u32(valid));
     float32x4x3_t n{}, target{};
     gather<0>(in, k, n, target);
     gather<1>(in, k, n, target);

@@ -110,16 +110,19 @@ void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
     }
 }
 
+std::array<float, 4> grid_intrinsics(const CameraConfig& camera, int stride_px) {
+  const int half = stride_px / 2;  // sample i is the pinhole pixel i s + s/2 (DepthCloudBuilder)
+  return {static_cast<float>(camera.fx / stride_px), static_cast<float>(camera.fy / stride_px),
+          static_cast<float>((camera.cx - half) / stride_px + 0.5),
+          static_cast<float>((camera.cy - half) / stride_px + 0.5)};
+}
+
 DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& refinement, double depth_noise_coeff,
                            double depth_units_per_m)
     : config_(refinement),
       depth_noise_coeff_(depth_noise_coeff),
       quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))),
-      grid_fx_(static_cast<float>(camera.fx / refinement.stride_px)),
-      grid_fy_(static_cast<float>(camera.fy / refinement.stride_px)),
-      // + 0.5 so that truncation rounds to the nearest grid sample
-      grid_cx_(static_cast<float>((camera.cx - refinement.stride_px / 2) / refinement.stride_px + 0.5)),
-      grid_cy_(static_cast<float>((camera.cy - refinement.stride_px / 2) / refinement.stride_px + 0.5)),
+      grid_(grid_intrinsics(camera, refinement.stride_px)),
       associate_(simd::active_kernels().associate) {}
 
 void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed,
@@ -145,7 +148,7 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   in.prev_normal = prev.normal.front().data();
   in.cols = prev.cols;
   in.rows = prev.rows;
-  in.fx = grid_fx_, in.fy = grid_fy_, in.cx = grid_cx_, in.cy = grid_cy_;
+  in.fx = grid_[0], in.fy = grid_[1], in.cx = grid_[2], in.cy = grid_[3];
   in.max_d2 = static_cast<float>(config_.max_distance_m * config_.max_distance_m);
   in.coeff = static_cast<float>(depth_noise_coeff_);
   in.floor2 = static_cast<float>(2 * quantum_sigma_m_ * quantum_sigma_m_);

@@ -70,6 +70,11 @@ struct DepthAlignment {
   double depth_noise_coeff = -1;
 };
 
+// The camera's intrinsics on the alignment's grid of stride_px pixels (DepthCloudBuilder's
+// pinhole grid), as the association kernel takes them: {fx, fy, cx, cy}, cx and cy with + 0.5
+// so that truncation rounds to the nearest sample.
+std::array<float, 4> grid_intrinsics(const CameraConfig& camera, int stride_px);
+
 class DepthAligner {
  public:
   DepthAligner(const CameraConfig& camera, const RefinementConfig& refinement, double depth_noise_coeff,
@@ -81,7 +86,7 @@ class DepthAligner {
   RefinementConfig config_;
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
-  float grid_fx_, grid_fy_, grid_cx_, grid_cy_;  // the intrinsics on the grid
+  std::array<float, 4> grid_;  // grid_intrinsics()
   // c from the residuals at T: their median, net of rounding, against each association's
   // noise geometry (both depths along their rays, seen along the normal).
   double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
