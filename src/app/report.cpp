@@ -82,6 +82,7 @@ void PairTallies::add(const PairResult& r) {
     total.covariance_ms += r.times.covariance_ms;
     ++timed;
     depth_refined += r.depth_points > 0 ? 1 : 0;
+    depth_trusted += r.depth_points > 0 && r.depth_trusted ? 1 : 0;
     point_pairs += r.point_pairs;
     tracked += r.tracked;
     sensor = r.sensor;
@@ -126,8 +127,10 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   const SensorEstimates& learnt = tallies.sensor;
   if (timed_pairs > 0 && learnt.depth_sigma_scale_t > 0) {
     out << std::setprecision(1) << "  depth alignment: fused into " << tallies.depth_refined << " of " << timed_pairs
-        << " good pairs; its own sigma scaled by " << learnt.depth_sigma_scale_t << " (translation) and "
-        << learnt.depth_sigma_scale_r << " (rotation), learnt against the features\n";
+        << " good pairs (" << tallies.depth_trusted << " at the factors learnt against the features, "
+        << tallies.depth_refined - tallies.depth_trusted
+        << " at the fixed refinement.distrusted_sigma_scale); its own sigma scaled by " << learnt.depth_sigma_scale_t
+        << " (translation) and " << learnt.depth_sigma_scale_r << " (rotation), learnt\n";
     out << "  sensor, learnt from the data: " << sensor_estimates_text(learnt) << "\n";
   }
   if (!with_groundtruth) {

@@ -242,7 +242,7 @@ void PairEstimator::describe_inlier_noise(const ProcessedFrame& prev, const Proc
 }
 
 int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s,
-                                     bool learn, Matrix6d& covariance) {
+                                     bool learn, Matrix6d& covariance, bool& depth_trusted) {
   if (prev.cloud.empty() || curr.cloud.empty() || !(dt_s > 0)) return 0;
   // The depth maps were taken at the depth instants: their alignment measures the motion over
   // the depth interval, carried to the colour interval at constant velocity. Two colour frames
@@ -276,18 +276,28 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
     alignment_trust_.update(difference, feature_cov, own_cov, depth_lag_.rotation_covariance());
   // A sensor whose alignment errs by several times what its residuals say has errors they
   // cannot see (a structured-light depth map's distortion, its lag): they do not average out
-  // from pair to pair, and fusing them costs more over a second than it gains per pair (TUM
-  // fr1's Kinect: factors 3-7; fused, pair error 4.69 -> 3.55 mm but 1-s drift 0.022 -> 0.027
-  // m/s). The features then stand alone; the factors go on being learnt.
-  if (std::max(alignment_trust_.translation_scale(), alignment_trust_.rotation_scale()) >
-      config_.refinement.max_sigma_scale_fused)
-    return 0;
-  // Nor while the depth is learnt to lag the colour: the alignment then measures the motion of
-  // another interval, which the lag is too noisy to carry pair by pair (above). The factors
-  // cannot be relied on to keep it out: where the features are weak their own error fills the
-  // difference, and the factors fall to their floor (TUM fr1 at 200-300 features a frame:
-  // fused, pair NEES 9-16 and 1-s rotation drift up by a third; src/pipeline/README.md).
-  if (std::abs(depth_lag_.lag_s()) > config_.refinement.max_depth_lag_fused_s) return 0;
+  // from pair to pair, and fused at the learnt factors they cost more over a second than they
+  // gain per pair (TUM fr1's Kinect: factors 3-7; fused, pair error 4.69 -> 3.55 mm but 1-s
+  // drift 0.022 -> 0.027 m/s). Nor can the factors be relied on while the depth is learnt to
+  // lag the colour: where the features are weak their own error fills the difference, and the
+  // factors fall to their floor (TUM fr1 at 200-300 features a frame: fused, pair NEES 9-16 and
+  // 1-s rotation drift up by a third). Such a sensor's alignment is fused at a fixed factor
+  // instead, weighed down so far that its slow errors stay below the features' over a second
+  // while it still takes off each pair the errors the features cannot see (the split of an
+  // image shift between sideways translation and rotation; src/pipeline/README.md), or not at
+  // all when that factor is 0.
+  const bool trusted =
+      std::max(alignment_trust_.translation_scale(), alignment_trust_.rotation_scale()) <=
+          config_.refinement.max_sigma_scale_fused &&
+      std::abs(depth_lag_.lag_s()) <= config_.refinement.max_depth_lag_fused_s;
+  if (!trusted) {
+    const RefinementConfig& r = config_.refinement;
+    if (!(r.distrusted_sigma_scale > 0)) return 0;
+    Vector6d k;
+    k << r.distrusted_sigma_scale, r.distrusted_sigma_scale, r.distrusted_sigma_scale_optical_axis,
+        Eigen::Vector3d::Constant(r.distrusted_sigma_scale_rotation);
+    depth_cov = k.asDiagonal() * own_cov * k.asDiagonal();
+  }
   Eigen::Isometry3d fused;
   Matrix6d fused_cov;
   if (!fuse_estimates(fit_.T_prev_curr, feature_cov, T_depth, depth_cov, alignment_.basis, alignment_.constrained,
@@ -295,6 +305,7 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
     return 0;
   fit_.T_prev_curr = fused;
   covariance = xi_covariance_from_right_perturbation(fused, fused_cov);
+  depth_trusted = trusted;
   return alignment_.points;
 }
 
@@ -403,7 +414,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (learn) learn_keypoint_sigma(prev, curr, curr_geometry);
   if (config_.refinement.enabled && !paper_noise_) {
     mark_cost_stage(CostStage::Refine);
-    r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov);
+    r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov, r.depth_trusted);
     r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
                 depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),
                 keypoint_sigma_.sigma_px(keypoint_sigma_.levels() - 1), keypoint_sigma_.levels() - 1};

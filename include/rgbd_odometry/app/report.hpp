@@ -20,6 +20,7 @@ struct PairTallies {
   int timed = 0;          // good pairs
   int rematched = 0;      // windowed matching fell short (PairResult::rematched)
   int depth_refined = 0;  // the depth alignment was fused in (PairResult::depth_points > 0)
+  int depth_trusted = 0;  // of those, at the learnt trust (PairResult::depth_trusted)
   long point_pairs = 0;   // over the good pairs
   long tracked = 0;       // of those point pairs, tracked below a pixel (PairResult::tracked)
   SensorEstimates sensor;  // as learnt by the last good pair

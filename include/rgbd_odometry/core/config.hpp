@@ -94,6 +94,12 @@ struct RefinementConfig {
   // Fused only while that learnt lag is at most this either way, seconds (pair_estimator.cpp
   // says why).
   double max_depth_lag_fused_s = 0.015;
+  // Where either of those refuses it, the alignment is fused with its sigma scaled by these
+  // fixed factors instead: sideways translation (x, y), translation along the optical axis,
+  // rotation (0: the features stand alone; pair_estimator.cpp says why).
+  double distrusted_sigma_scale = 40;
+  double distrusted_sigma_scale_optical_axis = 120;
+  double distrusted_sigma_scale_rotation = 100;
 };
 
 inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "paper"};

@@ -32,6 +32,7 @@ struct PairResult {
   int inliers = 0;
   double inlier_threshold_m = 0;
   int depth_points = 0;  // depth points of the alignment fused with the features; 0: features alone
+  bool depth_trusted = false;  // fused at the learnt trust, not at refinement.distrusted_sigma_scale
   SensorEstimates sensor;  // the sensor's constants as learnt up to this pair
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)

@@ -68,10 +68,11 @@ class PairEstimator {
 
   // The depth maps' alignment, started at fit_'s motion, fused with it: fit_'s motion and
   // `covariance` (of xi, the features') become the fused ones. The number of depth points
-  // used, 0 when the alignment failed or disagreed (then nothing changes).
+  // used, 0 when the alignment failed or disagreed (then nothing changes); depth_trusted: it
+  // was fused at the learnt factors rather than at refinement.distrusted_sigma_scale.
   // learn: whether this pair may update the learnt sensor constants (see its use).
   int refine_with_depth(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s, bool learn,
-                        Matrix6d& covariance);
+                        Matrix6d& covariance, bool& depth_trusted);
 
   Config config_;
   bool paper_noise_;  // covariance.model "paper", decided once
