@@ -282,6 +282,51 @@ TEST(DepthAlignment, FusionIsTheInformationWeightedMeanAndRefusesDisagreement) {
   EXPECT_EQ(untouched.translation().x(), 1.0);
 }
 
+TEST(DepthAlignment, FusedAtWeightsOtherThanItsErrorTheCovarianceIsTheEstimatesOwn) {
+  // GIVEN a feature estimate with 1 mm / 1 mrad per axis and an alignment of the translation
+  // only (the surfaces constrain 3 directions) whose error is 0.5 mm per axis, weighed as if it
+  // were 2 mm (a sensor whose slow errors are kept out of a consumer's second)
+  const Matrix6d cov_a = Matrix6d::Identity() * 1e-6;
+  const Matrix6d weighed = Matrix6d::Identity() * 4e-6, actual = Matrix6d::Identity() * 0.25e-6;
+  const Matrix6d basis = Matrix6d::Identity();
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0, 1);
+  const Eigen::Isometry3d truth = motion(0.02, -0.01, 0.005, 0.01, 0.02, -0.01);
+  const auto draw = [&](double sigma) {
+    Vector6d e;
+    for (int i = 0; i < 6; ++i) e(i) = sigma * g(rng);
+    return e;
+  };
+  // WHEN both are drawn many times and fused with the weights
+  constexpr int kDraws = 20000;
+  Vector6d mean = Vector6d::Zero();
+  Matrix6d second = Matrix6d::Zero(), reported = Matrix6d::Zero();
+  int fused_count = 0;
+  for (int n = 0; n < kDraws; ++n) {
+    const Eigen::Isometry3d a = truth * transform_from_xi(draw(1e-3));
+    const Eigen::Isometry3d b = truth * transform_from_xi(draw(0.5e-3));
+    Eigen::Isometry3d fused;
+    Matrix6d fused_cov;
+    if (!fuse_estimates(a, cov_a, b, weighed, basis, 3, fused, fused_cov, &actual)) continue;
+    const Vector6d e = right_perturbation_between(truth, fused);
+    mean += e;
+    second += e * e.transpose();
+    reported = fused_cov;  // the same for every draw: it depends on the covariances alone
+    ++fused_count;
+  }
+  ASSERT_GT(fused_count, kDraws * 99 / 100);  // the 99.9 % agreement gate, with weighed's room
+  mean /= fused_count;
+  const Matrix6d empirical = second / fused_count - mean * mean.transpose();
+  // THEN the reported covariance is the spread the fused estimate has: translation
+  // 0.8^2 * 1e-6 + 0.2^2 * 0.25e-6 = 0.65e-6 per axis (the information alone would claim
+  // 0.8e-6), within the 20,000 draws' sampling error (1 %; bounds of 4 %); rotation untouched
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(reported(i, i), 0.65e-6, 1e-12) << "axis " << i;
+    EXPECT_NEAR(empirical(i, i), reported(i, i), 0.04 * reported(i, i)) << "axis " << i;
+  }
+  for (int i = 3; i < 6; ++i) EXPECT_NEAR(reported(i, i), 1e-6, 1e-12) << "axis " << i;
+}
+
 TEST(DepthAlignment, TooFewPointsIsNoAlignment) {
   // GIVEN a depth map with nothing in range
   const CameraConfig cam = camera();

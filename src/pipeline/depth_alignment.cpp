@@ -375,7 +375,7 @@ Eigen::Matrix3d DepthLagEstimate::rotation_covariance() const {
 
 bool fuse_estimates(const Eigen::Isometry3d& a, const Matrix6d& cov_a, const Eigen::Isometry3d& b,
                     const Matrix6d& cov_b, const Matrix6d& basis_b, int k, Eigen::Isometry3d& fused,
-                    Matrix6d& fused_cov) {
+                    Matrix6d& fused_cov, const Matrix6d* b_error_cov) {
   if (k < 1 || k > 6) return false;
   // Fixed-capacity matrices: the pair stage allocates nothing.
   using Basis = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6>;
@@ -393,7 +393,14 @@ bool fuse_estimates(const Eigen::Isometry3d& a, const Matrix6d& cov_a, const Eig
   const Vector6d x = K * z;
   if (!x.allFinite()) return false;
   fused = a * transform_from_xi(x);
-  fused_cov = cov_a - K * (V.transpose() * cov_a);
+  if (b_error_cov) {
+    // x = G d to first order, d = b - a: a's error enters as (I - G), b's as G.
+    const Matrix6d G = K * V.transpose();
+    const Matrix6d keep = Matrix6d::Identity() - G;
+    fused_cov = keep * cov_a * keep.transpose() + G * *b_error_cov * G.transpose();
+  } else {
+    fused_cov = cov_a - K * (V.transpose() * cov_a);
+  }
   fused_cov = 0.5 * (fused_cov + fused_cov.transpose());
   return fused_cov.allFinite();
 }

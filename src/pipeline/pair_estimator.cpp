@@ -290,6 +290,9 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
       std::max(alignment_trust_.translation_scale(), alignment_trust_.rotation_scale()) <=
           config_.refinement.max_sigma_scale_fused &&
       std::abs(depth_lag_.lag_s()) <= config_.refinement.max_depth_lag_fused_s;
+  // The pair's covariance is then that of the estimate so made, with the alignment's error per
+  // pair as the learnt factors have it (consistent pair by pair), not the fixed factors' size.
+  const Matrix6d depth_error_cov = depth_cov;
   if (!trusted) {
     const RefinementConfig& r = config_.refinement;
     if (!(r.distrusted_sigma_scale > 0)) return 0;
@@ -301,7 +304,7 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   Eigen::Isometry3d fused;
   Matrix6d fused_cov;
   if (!fuse_estimates(fit_.T_prev_curr, feature_cov, T_depth, depth_cov, alignment_.basis, alignment_.constrained,
-                      fused, fused_cov))
+                      fused, fused_cov, trusted ? nullptr : &depth_error_cov))
     return 0;
   fit_.T_prev_curr = fused;
   covariance = xi_covariance_from_right_perturbation(fused, fused_cov);

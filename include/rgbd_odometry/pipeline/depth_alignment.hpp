@@ -188,8 +188,12 @@ class DepthNoiseEstimate {
 // first k columns of `basis_b` (orthonormal), each with the covariance of its right
 // perturbation: the information-weighted mean about `a` and the fused covariance. False
 // (outputs untouched) when they disagree beyond the chi^2(k) 99.9 % gate.
+// b_error_cov, when given: b's error as it is, where cov_b weighs b down on purpose (errors
+// that do not average out over a consumer's second); the fused covariance is then that of the
+// estimate made with cov_b's weights, (I - G) cov_a (I - G)^T + G b_error_cov G^T (G the gain
+// taken to the full space), not the smaller one cov_b's information alone would claim.
 bool fuse_estimates(const Eigen::Isometry3d& a, const Matrix6d& cov_a, const Eigen::Isometry3d& b,
                     const Matrix6d& cov_b, const Matrix6d& basis_b, int k, Eigen::Isometry3d& fused,
-                    Matrix6d& fused_cov);
+                    Matrix6d& fused_cov, const Matrix6d* b_error_cov = nullptr);
 
 }  // namespace rgbdo
