@@ -258,14 +258,15 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   const Matrix6d own_cov = alignment_.covariance / (to_depth * to_depth);
   const Matrix6d feature_cov = right_perturbation_covariance(fit_.T_prev_curr, covariance);
   const Vector6d difference = right_perturbation_between(fit_.T_prev_curr, T_depth);
-  if (learn && last_pair_) {
+  if (learn && last_feature_pair_) {
     // The depth's lag behind the colour, learnt and reported (DepthLagEstimate). Not corrected
     // here: the change of rate it would be multiplied by is the features' own, as noisy per
     // pair as the correction would be large (fr1: 0.3 deg either way), and it would make the
     // two estimates' errors correlated.
-    const Vector6d delta_rate = xi_from_transform(fit_.T_prev_curr) / dt_s - last_pair_->rate;
+    const PairRate& last = *last_feature_pair_;
+    const Vector6d delta_rate = xi_from_transform(fit_.T_prev_curr) / dt_s - last.rate;
     const double noise = (covariance.bottomRightCorner<3, 3>().trace() / (dt_s * dt_s)) +
-                         last_pair_->covariance.bottomRightCorner<3, 3>().trace() / (last_pair_->dt_s * last_pair_->dt_s);
+                         last.covariance.bottomRightCorner<3, 3>().trace() / (last.dt_s * last.dt_s);
     depth_lag_.update(difference.tail<3>(), delta_rate.tail<3>(), noise);
   }
   Matrix6d depth_cov = alignment_trust_.scaled(own_cov);
@@ -330,6 +331,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const auto fail = [&](Status s) {
     r.status = s;
     last_pair_.reset();  // a gap: the old velocity says nothing about the next pair
+    last_feature_pair_.reset();
     return r;
   };
   // The newer frame's problem is the news; the older one's was reported with its own pair.
@@ -417,7 +419,9 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (learn) learn_keypoint_sigma(prev, curr, curr_geometry);
   if (config_.refinement.enabled && !paper_noise_) {
     mark_cost_stage(CostStage::Refine);
+    const PairRate features_only{xi / dt_s, cov, dt_s};
     r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov, r.depth_trusted);
+    if (dt_s > 0) last_feature_pair_ = features_only;
     r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
                 depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),
                 keypoint_sigma_.sigma_px(keypoint_sigma_.levels() - 1), keypoint_sigma_.levels() - 1};

@@ -36,7 +36,10 @@ class PairEstimator {
   static bool dropped_frame(const PairResult& r) { return r.status == Status::StampNotIncreasing; }
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
-  void forget_motion() { last_pair_.reset(); }
+  void forget_motion() {
+    last_pair_.reset();
+    last_feature_pair_.reset();
+  }
 
  private:
   // Matching (within the window window_prior predicts, or over all pairs when null), 3-D
@@ -104,6 +107,9 @@ class PairEstimator {
   // The last good pair: its velocity is the motion prior for matching and timing
   // compensation; its rate and covariance (before its latency terms) feed the next's.
   std::optional<PairRate> last_pair_;
+  // The same pair's features alone, before any fusion with the depth alignment: the depth's lag
+  // is read against their change of rate, which the alignment fused into them would bias.
+  std::optional<PairRate> last_feature_pair_;
 };
 
 }  // namespace rgbdo
