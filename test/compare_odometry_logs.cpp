@@ -5,10 +5,16 @@
 //   compare_odometry_logs A.csv B.csv
 //
 // Tolerances: the two builds run the same algorithm on the same RNG streams; they differ
-// only where libm's last bits do (measured: a 12-ulp difference in log). Such differences
-// stay below 1e-9 m and 1e-9 in the quaternion; the log's own precision (%.9g, %.6e) is
-// coarser. Any algorithmic divergence (another keypoint, match or RANSAC sample) moves a
-// pose by far more than 1e-6 m, so 1e-6 separates the two cleanly.
+// only where the last bits of floating point do (libm: a 12-ulp difference in log; Eigen's
+// SSE2 reductions against VFP's scalar ones; OpenCV's own builds). Through the features
+// alone such differences stay below 1e-9 m. The depth alignment, fused on a Kinect at its
+// fixed factors, carries them through an iterative fit whose weak directions amplify them:
+// measured 4.1e-6 m (pose) and 1.7e-3 (covariance, relative) on the bundled frames' first pair
+// with OpenCV's ORB, where the alignment moves 6.5 mm from its seed; 2.3e-8 m with GRID_ORB.
+// The tolerances sit two to three times above that, a few thousandths of a pair's error. An
+// algorithmic divergence (another keypoint, match or RANSAC sample) changes the statuses or
+// the inlier counts, which must be equal, or moves a pose by far more.
+
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -18,8 +24,8 @@
 
 namespace {
 
-constexpr double kPoseTolerance = 1e-6;          // metres, and quaternion components
-constexpr double kCovarianceRelTolerance = 1e-4;  // relative to the row's largest entry
+constexpr double kPoseTolerance = 1e-5;          // metres, and quaternion components
+constexpr double kCovarianceRelTolerance = 5e-3;  // relative to the row's largest entry
 
 std::vector<std::vector<std::string>> read_csv(const char* path) {
   std::ifstream in(path);
