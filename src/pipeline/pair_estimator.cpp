@@ -419,9 +419,11 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   if (learn) learn_keypoint_sigma(prev, curr, curr_geometry);
   if (config_.refinement.enabled && !paper_noise_) {
     mark_cost_stage(CostStage::Refine);
-    const PairRate features_only{xi / dt_s, cov, dt_s};
+    // The features' own rate, kept before the fusion changes fit_ and cov (last_feature_pair_).
+    const std::optional<PairRate> features_only =
+        dt_s > 0 ? std::optional<PairRate>(PairRate{xi / dt_s, cov, dt_s}) : std::nullopt;
     r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov, r.depth_trusted);
-    if (dt_s > 0) last_feature_pair_ = features_only;
+    if (features_only) last_feature_pair_ = features_only;
     r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
                 depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),
                 keypoint_sigma_.sigma_px(keypoint_sigma_.levels() - 1), keypoint_sigma_.levels() - 1};
