@@ -33,8 +33,11 @@ endif()
 # the learnt constants are back on their looped course, each a new row (measured: one frame
 # not processed on an idle machine, 52 new motions; 134 with a CPU hog on each core, 2,532;
 # 6 in a CI run beside the other tests, 438; 10 with a CPU hog on each core, 729: 73 a frame
-# both times, over the 60 once allowed). 150 a frame not processed are allowed. State that
-# drifted would make every row new (~9,800).
+# both times, over the 60 once allowed; 33 with a CPU hog on each core, 2,433; 3 in a CI run,
+# 621: 207 a frame, each frame not processed starting a run of 85-136 new rows that ends with
+# the rows repeating to the end of the run, the first of them begun before pair 200, so that
+# its whole run counted). 250 a frame not processed are allowed. State that drifted would make
+# every row new (~9,800).
 file(STRINGS ${LOG} rows)
 set(motions "")
 set(index 0)
@@ -51,7 +54,7 @@ list(LENGTH motions distinct)
 # and the pair after it is matched within the window that jump's velocity predicts: measured,
 # it comes out one of two ways from pass to pass (78 inliers and a wrong 0.2 m, or 103 and the
 # right motion), the next few pairs following it. One such run of up to 12 rows is allowed.
-math(EXPR distinct_allowed "40 + 2 + 12 + 150 * ${not_processed}")
+math(EXPR distinct_allowed "40 + 2 + 12 + 250 * ${not_processed}")
 message(STATUS "${compared} pairs after the first 200: ${distinct} distinct motions (one pass: 40; allowed ${distinct_allowed} with ${not_processed} frames not processed)")
 if(distinct_allowed GREATER_EQUAL compared)
   message(STATUS "too many frames skipped for a comparison of passes (an emulator or a sanitizer): not compared")
