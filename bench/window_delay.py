@@ -46,13 +46,17 @@ def analyse(log_path, evaluation_path, window_s=1.0):
     change = np.array([(1.5 * rate[j] - 0.5 * rate[j - 1]) - (1.5 * rate[i] - 0.5 * rate[i + 1]) for i, j in spans])
     result = []
     for a in range(6):
-        y, x = summed[:, a], change[:, a]
-        slope = float(np.dot(x, y) / np.dot(x, x)) if np.dot(x, x) > 0 else 0.0
-        left = y - slope * x
-        total = float(np.mean(y * y))
-        r2 = 1 - float(np.mean(left * left)) / total if total > 0 else 0.0
-        result.append((-slope, r2, math.sqrt(total), math.sqrt(float(np.mean(left * left)))))
+        slope, total, left = through_origin(change[:, a], summed[:, a])
+        r2 = 1 - (left / total) ** 2 if total > 0 else 0.0
+        result.append((-slope, r2, total, left))
     return result, len(spans), split_shares(summed)
+
+
+def through_origin(x, y):
+    """y = slope x, least squares through the origin: the slope, rms of y, rms of what is left."""
+    slope = float(np.dot(x, y) / np.dot(x, x)) if np.dot(x, x) > 0 else 0.0
+    left = y - slope * x
+    return slope, math.sqrt(float(np.mean(y * y))), math.sqrt(float(np.mean(left * left)))
 
 
 def split_shares(summed):
@@ -62,11 +66,9 @@ def split_shares(summed):
     shares = []
     for t, r in ((0, 4), (1, 3)):
         y, x = summed[:, t], summed[:, r]
-        slope = float(np.dot(x, y) / np.dot(x, x)) if np.dot(x, x) > 0 else 0.0
-        left = y - slope * x
+        slope, total, left = through_origin(x, y)
         correlation = float(np.corrcoef(x, y)[0, 1]) if np.std(x) > 0 and np.std(y) > 0 else 0.0
-        shares.append((AXES[t], AXES[r], slope, correlation, math.sqrt(float(np.mean(y * y))),
-                       math.sqrt(float(np.mean(left * left)))))
+        shares.append((AXES[t], AXES[r], slope, correlation, total, left))
     return shares
 
 
