@@ -21,38 +21,16 @@ import sys
 import numpy as np
 from PIL import Image
 
+from tum_groundtruth import camera_rates, read_groundtruth
+
 FOCAL_PX = 517.3       # fr1's colour camera
 SCENE_DEPTH_M = 1.5    # what the image centre sees on fr1's desk sequences
 RATE_HALF_SPAN_S = 0.02
 
 
-def read_groundtruth(path):
-    rows = [line.split() for line in open(path) if line.strip() and not line.startswith("#")]
-    return np.array(rows, dtype=float)
-
-
-def rotation_matrix(q):
-    x, y, z, w = q / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def pose_at(gt, t):
-    """Position interpolated, orientation of the nearest sample (100 Hz: 5 ms at most)."""
-    position = np.array([np.interp(t, gt[:, 0], gt[:, i]) for i in (1, 2, 3)])
-    nearest = min(np.searchsorted(gt[:, 0], t), len(gt) - 1)
-    return position, rotation_matrix(gt[nearest, 4:8])
-
-
 def image_motion_px_per_s(gt, t):
     """Image velocity at the centre: -f (v_x / Z + w_y), -f (v_y / Z - w_x), camera frame."""
-    p0, r0 = pose_at(gt, t - RATE_HALF_SPAN_S)
-    p1, r1 = pose_at(gt, t + RATE_HALF_SPAN_S)
-    v = r0.T @ (p1 - p0) / (2 * RATE_HALF_SPAN_S)
-    turn = r0.T @ r1
-    w = 0.5 * np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]])
-    w /= 2 * RATE_HALF_SPAN_S
+    v, w = camera_rates(gt, t, RATE_HALF_SPAN_S)
     return -FOCAL_PX * np.array([v[0] / SCENE_DEPTH_M + w[1], v[1] / SCENE_DEPTH_M - w[0]])
 
 

@@ -42,6 +42,8 @@ std::vector<Param> param_table(Config& c) {
       {"depth.max_m", "m", "farther depth is invalid (beyond ~4.5 m sigma_Z exceeds 3 cm)", &c.depth.max_m, 0.01, 100},
       {"depth.edge_max_relative_step", "", "a keypoint whose 5x5 depth neighbourhood spans more than this fraction of its depth is on an occlusion edge: not used", &c.depth.edge_max_relative_step, 0.0, inf},
       {"depth.compensate_timing", "", "carry each keypoint's depth from the depth frame's capture time to the colour frame's", &c.depth.compensate_timing},
+      {"depth.registration_x_px", "px", "the depth image's misregistration against the colour along x: what the colour shows at u is in the depth at u - this (bench/depth_lag_edges.py measures it)", &c.depth.registration_x_px, -50, 50},
+      {"depth.registration_y_px", "px", "the same along y", &c.depth.registration_y_px, -50, 50},
       {"features.detector", "", "GRID_ORB (ours) or an OpenCV detector by name: ORB, AKAZE, BRISK, SIFT, KAZE, FAST, GFTT, AGAST", &c.features.detector},
       {"features.descriptor", "", "GRID_ORB (with its detector) or an OpenCV descriptor: ORB, AKAZE, BRISK, SIFT, KAZE", &c.features.descriptor},
       {"features.max_features", "", "keypoints per frame", &c.features.max_features, 10, 100000},

@@ -52,8 +52,10 @@ void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, 
   for (size_t i = 0; i < n; ++i) {
     out.normalized.emplace_back(undistorted_[i].x, undistorted_[i].y);
     out.pixel.emplace_back(distorted_[i].x, distorted_[i].y);
-    const int u = static_cast<int>(std::lround(distorted_[i].x));
-    const int v = static_cast<int>(std::lround(distorted_[i].y));
+    // Where the depth image shows what the colour shows at the keypoint (its registration).
+    const Eigen::Vector2d at(distorted_[i].x - depth_.registration_x_px, distorted_[i].y - depth_.registration_y_px);
+    const int u = static_cast<int>(std::lround(at.x()));
+    const int v = static_cast<int>(std::lround(at.y()));
     double z = 0;
     Eigen::Vector2d gradient = Eigen::Vector2d::Zero();
     if (u >= r && v >= r && u < depth_m.cols - r && v < depth_m.rows - r) {
@@ -75,7 +77,7 @@ void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, 
         gradient.y() = (depth_m.at<float>(v + r, u) - depth_m.at<float>(v - r, u)) / (2.0 * r);
         // Read at the nearest pixel, carried along the slope to the keypoint's own position,
         // a fraction of a pixel away (more for a coarse pyramid level's keypoint).
-        z += gradient.dot(Eigen::Vector2d(distorted_[i].x - u, distorted_[i].y - v));
+        z += gradient.dot(at - Eigen::Vector2d(u, v));
       }
     }
     out.depth_m.push_back(z);

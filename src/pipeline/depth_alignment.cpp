@@ -47,6 +47,7 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
   // the lens model: sample (i, j) is the ray through the pinhole pixel (i s + s/2, j s + s/2),
   // read at the sensor pixel nearest to where the lens puts it, and its ray is that sensor
   // pixel's own (undistorted back), so that the point is exact and only its grid place rounded.
+  // The depth pixel is the colour's moved by the depth image's registration (DepthConfig).
   const int half = stride_ / 2;
   std::vector<cv::Point3f> pinhole;
   for (int j = 0; j < rows_; ++j)
@@ -58,11 +59,12 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
   std::vector<cv::Point2f> sensor, rays;
   cv::projectPoints(pinhole, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, distortion, sensor);
   std::vector<cv::Point2f> nearest;
+  const double dx = depth.registration_x_px, dy = depth.registration_y_px;
   for (const cv::Point2f& p : sensor) {
-    const auto u = static_cast<int>(std::lround(p.x)), v = static_cast<int>(std::lround(p.y));
+    const auto u = static_cast<int>(std::lround(p.x - dx)), v = static_cast<int>(std::lround(p.y - dy));
     const bool inside = u >= 0 && v >= 0 && u < camera.width && v < camera.height;
     pixel_.push_back(inside ? v * camera.width + u : -1);
-    nearest.emplace_back(static_cast<float>(inside ? u : 0), static_cast<float>(inside ? v : 0));
+    nearest.emplace_back(static_cast<float>(inside ? u + dx : 0), static_cast<float>(inside ? v + dy : 0));
   }
   cv::undistortPoints(nearest, rays, K, distortion);
   for (const cv::Point2f& r : rays) ray_.emplace_back(r.x, r.y);

@@ -31,6 +31,12 @@ struct DepthConfig {
   // Correct each keypoint's depth from the depth frame's capture time to the colour frame's
   // (the streams of PrimeSense sensors are not synchronised; TUM fr1 is up to 17 ms apart).
   bool compensate_timing = true;
+  // Where the depth image is misregistered against the colour: a surface the colour image shows
+  // at pixel (u, v) is in the depth image at (u - registration_x_px, v - registration_y_px).
+  // A sensor's registration (TUM fr1's Kinect: +0.77, -1.11 px) is read from its recording's
+  // occlusion edges by bench/depth_lag_edges.py.
+  double registration_x_px = 0.0;
+  double registration_y_px = 0.0;
 };
 
 // What features.detector and features.descriptor may name: the project's own extractor
