@@ -61,6 +61,36 @@ TEST(BackProject, RejectsOcclusionEdgesHolesAndOutOfRange) {
   EXPECT_EQ(g.depth_m[4], 0);           // neighbourhood leaves the image
 }
 
+// A depth image sloping along both image axes: Z = 1.5 + 0.002 u - 0.0015 v metres, so that
+// where it is read shows in the depth.
+cv::Mat ramp() {
+  cv::Mat d(480, 640, CV_32F);
+  for (int v = 0; v < d.rows; ++v)
+    for (int u = 0; u < d.cols; ++u) d.at<float>(v, u) = static_cast<float>(1.5 + 0.002 * u - 0.0015 * v);
+  return d;
+}
+
+TEST(BackProject, ReadsTheDepthWhereItsImageRegistersAgainstTheColour) {
+  // GIVEN a depth image that shows each surface 0.77 px left of and 1.11 px below where the
+  // colour shows it (TUM fr1's Kinect), and keypoints at whole and fractional pixels
+  DepthConfig registered;
+  registered.registration_x_px = 0.77;
+  registered.registration_y_px = -1.11;
+  const std::vector<cv::KeyPoint> kps{{{200.f, 150.f}, 7.f}, {{321.4f, 260.7f}, 7.f}, {{450.25f, 333.5f}, 7.f}};
+  KeypointGeometry as_registered, unregistered;
+  KeypointBackProjector(fr1_camera(), registered).compute(kps, ramp(), as_registered);
+  KeypointBackProjector(fr1_camera(), DepthConfig{}).compute(kps, ramp(), unregistered);
+  for (size_t i = 0; i < kps.size(); ++i) {
+    const double u = kps[i].pt.x, v = kps[i].pt.y;
+    // THEN each depth is the ramp's at the keypoint moved by the registration (the slope
+    // carries it from the nearest pixel), and the unregistered reading is the keypoint's own
+    EXPECT_NEAR(as_registered.depth_m[i], 1.5 + 0.002 * (u - 0.77) - 0.0015 * (v + 1.11), 1e-5) << i;
+    EXPECT_NEAR(unregistered.depth_m[i], 1.5 + 0.002 * u - 0.0015 * v, 1e-5) << i;
+    // and the ray is the colour's: the registration moves where the depth is read, not the point
+    EXPECT_EQ(as_registered.normalized[i], unregistered.normalized[i]);
+  }
+}
+
 TEST(BackProject, TimingCompensationMovesDepthToTheColourInstant) {
   // GIVEN a camera approaching a wall at 0.3 m/s; the wall is 2 m away at t = 0.
   // Depth images are taken 15 ms before (prev) and 15 ms after (curr) their colour images.

@@ -58,7 +58,7 @@ TEST(EndToEnd, EveryPairSucceedsWithASaneCovariance) {
 }
 
 TEST(EndToEnd, AccuracyHoldsItsMeasuredLevel) {
-  // Measured on these 40 frames: 4.03 mm / 0.288 deg frame to frame, 0.0086 m/s / 0.484 deg/s
+  // Measured on these 40 frames: 4.03 mm / 0.288 deg frame to frame, 0.0086 m/s / 0.488 deg/s
   // over 1 s (the paper reproduction: 10.6 mm / 0.44 deg on the full sequence). Bounds ~5 %
   // above, room for float and library-version differences, not for a worse pipeline. (The
   // sub-pixel tracking moved them from 4.65 mm / 0.318 deg, 0.014 m/s / 0.712 deg/s to 4.65 mm
@@ -72,13 +72,13 @@ TEST(EndToEnd, AccuracyHoldsItsMeasuredLevel) {
   EXPECT_LT(s.rpe_translation_m.rmse, 0.00423);
   EXPECT_LT(s.rpe_rotation_deg.rmse, 0.302);
   EXPECT_LT(s.drift_translation_mps.rmse, 0.0090);
-  EXPECT_LT(s.drift_rotation_degps.rmse, 0.508);
+  EXPECT_LT(s.drift_rotation_degps.rmse, 0.512);
 }
 
 TEST(EndToEnd, SubpixelTrackingLowersTheOneSecondDrift) {
   // The same frames with the detector's integer corners (matching.subpixel_tracking off):
-  // measured 1-s drift 0.013 m/s and 0.773 deg/s, against 0.009 and 0.548 tracked (~0.7x,
-  // 0.71x); frame to frame 4.64 against 4.56 mm, 0.319 against 0.322 deg. The features alone
+  // measured 1-s drift 0.013 m/s and 0.773 deg/s, against 0.009 and 0.554 tracked (~0.7x,
+  // 0.72x); frame to frame 4.64 against 4.56 mm, 0.319 against 0.323 deg. The features alone
   // (refinement.distrusted_sigma_scale 0): the Kinect's depth alignment, fused at its fixed
   // factors as shipped, takes off part of what either leaves.
   Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
@@ -111,7 +111,7 @@ TEST(EndToEnd, MostPointPairsAreTracked) {
 TEST(EndToEnd, CovarianceIsConsistentWithoutAFittedScale) {
   // The physical noise model at covariance.scale = 1, against ground truth with its allowance.
   // Measured on these frames: joint NEES per pair mean 5.35 (89.7 % below the chi2(6) gate),
-  // over 1-s windows 3.15; per axis mean e^2/var t 0.995 0.660 0.515, r 1.108 1.243 0.198.
+  // over 1-s windows 3.16; per axis mean e^2/var t 0.993 0.661 0.515, r 1.109 1.241 0.199.
   // Bands of -25 % / +33 % around each: a covariance 1.4x too large or too small leaves them.
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   ASSERT_EQ(config.covariance.scale, 1.0);
@@ -119,9 +119,9 @@ TEST(EndToEnd, CovarianceIsConsistentWithoutAFittedScale) {
   EXPECT_GT(s.pair_nees.mean, 0.75 * 5.35);
   EXPECT_LT(s.pair_nees.mean, 1.33 * 5.35);
   EXPECT_GT(s.pair_nees.within_95, 0.87);
-  EXPECT_GT(s.window_nees.mean, 0.75 * 3.15);
-  EXPECT_LT(s.window_nees.mean, 1.33 * 3.15);
-  const double measured[6] = {0.995, 0.660, 0.515, 1.108, 1.243, 0.198};
+  EXPECT_GT(s.window_nees.mean, 0.75 * 3.16);
+  EXPECT_LT(s.window_nees.mean, 1.33 * 3.16);
+  const double measured[6] = {0.993, 0.661, 0.515, 1.109, 1.241, 0.199};
   for (int a = 0; a < 6; ++a) {
     EXPECT_GT(s.axis_nees(a), 0.75 * measured[a]) << "axis " << a;
     EXPECT_LT(s.axis_nees(a), 1.33 * measured[a]) << "axis " << a;
@@ -166,7 +166,7 @@ TEST(EndToEnd, ADepthLaggingTheColourIsNotFusedWhereTheFeaturesAreWeak) {
 TEST(EndToEnd, TheDepthLagIsReadTheSameWhetherOrNotTheAlignmentIsFused) {
   // The lag is the slope of the alignment's difference from the features on the features'
   // change of rate. The Kinect's alignment, fused at the fixed distrusted factors, must not
-  // enter that change of rate: measured 25.7 ms with it and without it (26.2 ms when the fused
+  // enter that change of rate: measured 25.7 ms with it and 25.6 without it (26.2 ms when the fused
   // rate of the previous pair stood in the regressor), so within 2 %.
   Config alone = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   ASSERT_GT(alone.refinement.distrusted_sigma_scale, 0);
@@ -180,7 +180,7 @@ TEST(EndToEnd, TheDepthLagIsReadTheSameWhetherOrNotTheAlignmentIsFused) {
 TEST(EndToEnd, WithoutTheLatencyTermsOneSecondWindowsAreOverConfident) {
   // The same frames with the capture latencies taken as calibrated away (both sigmas 0):
   // measured 1-s window NEES 15.8 (3 of 9 windows below the gate) and pair NEES 8.14, against
-  // 3.15 and 5.35 with them.
+  // 3.16 and 5.35 with them.
   Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   c.covariance.colour_latency_sigma_s = 0;
   c.covariance.depth_latency_sigma_s = 0;

@@ -28,6 +28,9 @@ constexpr double kChi2Median1 = 0.4549;
 constexpr int kNormalReach = 1;
 // The Gauss-Newton steps stop below these (m, rad).
 constexpr double kStepTranslationM = 1e-5, kStepRotationRad = 1e-5;
+// The lens model's inversion for the grid's rays: converged to 0.001 px by 20 steps over
+// TUM fr1's whole image.
+constexpr int kLensInversionSteps = 50;
 
 }  // namespace
 
@@ -66,7 +69,10 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
     pixel_.push_back(inside ? v * camera.width + u : -1);
     nearest.emplace_back(static_cast<float>(inside ? u + dx : 0), static_cast<float>(inside ? v + dy : 0));
   }
-  cv::undistortPoints(nearest, rays, K, distortion);
+  // Iterated to convergence, once: OpenCV's default 5 steps leave up to 0.13 px at the corners
+  // of TUM fr1's lens, where the grid still samples (0.7 px behind a shorter focal length).
+  cv::undistortPoints(nearest, rays, K, distortion, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT, kLensInversionSteps, 0));
   for (const cv::Point2f& r : rays) ray_.emplace_back(r.x, r.y);
 }
 
