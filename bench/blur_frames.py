@@ -21,7 +21,7 @@ import sys
 import numpy as np
 from PIL import Image
 
-from tum_groundtruth import camera_rates, read_groundtruth
+from tum_groundtruth import camera_rates, read_groundtruth, read_index
 
 FOCAL_PX = 517.3       # fr1's colour camera
 SCENE_DEPTH_M = 1.5    # what the image centre sees on fr1's desk sequences
@@ -63,11 +63,8 @@ def main():
         os.symlink(os.path.join(source, "depth"), os.path.join(out, "depth"))
     gt = read_groundtruth(os.path.join(source, "groundtruth.txt"))
     lengths = []
-    for line in open(os.path.join(source, "rgb.txt")):
-        if not line.strip() or line.startswith("#"):
-            continue
-        stamp, name = line.split()[:2]
-        motion = image_motion_px_per_s(gt, float(stamp)) * exposure_s
+    for stamp, name in read_index(os.path.join(source, "rgb.txt")):
+        motion = image_motion_px_per_s(gt, stamp) * exposure_s
         lengths.append(np.linalg.norm(motion))
         image = np.asarray(Image.open(os.path.join(source, name)).convert("RGB"))
         Image.fromarray(smear(image, motion)).save(os.path.join(out, name))

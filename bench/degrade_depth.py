@@ -17,7 +17,7 @@ import os
 import numpy as np
 from PIL import Image
 
-UNITS_PER_M = 5000.0
+from tum_groundtruth import UNITS_PER_M
 
 
 def link_or_copy(src, dst):

@@ -36,10 +36,9 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
-from tum_groundtruth import camera_rates, read_groundtruth, read_index
+from tum_groundtruth import UNITS_PER_M, camera_rates, read_groundtruth, read_index
 
 TUM_FR1 = (517.306408, 516.469215, 318.643040, 255.313989, 0.262383, -0.953104, -0.005358, 0.002628, 1.163314)
-UNITS_PER_M = 5000.0
 EDGE_RELATIVE_STEP = 0.08   # a step between neighbours of over 8 % of the nearer depth
 SEARCH_PX = 16              # the depth edges are searched for within ±16 px of the colour's
 MIN_EDGE_PIXELS = 200

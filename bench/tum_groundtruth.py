@@ -5,6 +5,8 @@ the rates below are the colour camera's own, in its own frame.
 """
 import numpy as np
 
+UNITS_PER_M = 5000.0   # TUM-layout depth PNGs: uint16, 5000 per metre
+
 
 def read_index(path):
     """rgb.txt / depth.txt: [(stamp, relative path)], comments skipped."""
