@@ -208,6 +208,11 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   EXPECT_EQ(json_number(result, "causalityViolations"), 0) << result;
   EXPECT_GT(json_number(result, "garbageBytes"), 0) << "the link was unkind: " << result;
   EXPECT_GT(json_number(result, "corruptFrames"), 0) << result;
+  // Noise with start bytes in it (false headers of any length and id) costs no request its
+  // answer: the parser passes a false start over instead of skipping by its length field.
+  EXPECT_GT(json_number(result, "startByteNoise"), 0) << result;
+  const double delivered = json_number(result, "requestsDeliveredWhileHeard");
+  EXPECT_GE(json_number(result, "answersReceived"), 0.99 * delivered) << "requests answered of those delivered: " << result;
   // Its converged offset carries our capture times onto its clock: each ODOMETRY stamp lands
   // before its arrival (a capture time is never after the frame reached us: the device
   // clock's lead, sensor/device_clock.hpp), to the offset's error (< 1 ms, asserted above),

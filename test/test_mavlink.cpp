@@ -39,6 +39,12 @@ const std::vector<XmlField> kVisionPositionDeltaXml = {{"uint64_t", "time_usec"}
                                                        {"float", "angle_delta", 3},
                                                        {"float", "position_delta", 3},
                                                        {"float", "confidence"}};
+const std::vector<XmlField> kCommandLongXml = {{"uint8_t", "target_system"}, {"uint8_t", "target_component"},
+                                               {"uint16_t", "command"},      {"uint8_t", "confirmation"},
+                                               {"float", "param1"},          {"float", "param2"},
+                                               {"float", "param3"},          {"float", "param4"},
+                                               {"float", "param5"},          {"float", "param6"},
+                                               {"float", "param7"}};
 
 // Little-endian reads by shifting, so the test holds on any host.
 std::uint64_t read_le(const std::uint8_t* p, int bytes) {
@@ -101,6 +107,7 @@ TEST(MavlinkDefinitions, CrcExtraDerivedFromFieldListsEqualsConstants) {
   EXPECT_EQ(derive_crc_extra("HEARTBEAT", kHeartbeatXml), Heartbeat::kCrcExtra);
   EXPECT_EQ(derive_crc_extra("ODOMETRY", kOdometryXml), Odometry::kCrcExtra);
   EXPECT_EQ(derive_crc_extra("VISION_POSITION_DELTA", kVisionPositionDeltaXml), VisionPositionDelta::kCrcExtra);
+  EXPECT_EQ(derive_crc_extra("COMMAND_LONG", kCommandLongXml), CommandLong::kCrcExtra);
   // The values the generated headers carry (MAVLINK_MSG_ID_*_CRC), as a check of the check.
   EXPECT_EQ(Heartbeat::kCrcExtra, 50);
   EXPECT_EQ(Odometry::kCrcExtra, 91);
@@ -118,6 +125,10 @@ TEST(MavlinkDefinitions, MessageIdsAndLengths) {
   EXPECT_EQ(wire_length(kOdometryXml, false), Odometry::kBasePayloadBytes);
   EXPECT_EQ(wire_length(kOdometryXml, true), Odometry::kPayloadBytes);
   EXPECT_EQ(wire_length(kVisionPositionDeltaXml, true), VisionPositionDelta::kPayloadBytes);
+  EXPECT_EQ(wire_length(kCommandLongXml, true), CommandLong::kPayloadBytes);
+  EXPECT_EQ(wire_offset(kCommandLongXml, "command"), CommandLong::kCommandOffset);
+  EXPECT_EQ(wire_offset(kCommandLongXml, "target_component"), CommandLong::kTargetComponentOffset);
+  EXPECT_EQ(wire_offset(kCommandLongXml, "confirmation"), CommandLong::kConfirmationOffset);
   EXPECT_EQ(Odometry::kBasePayloadBytes, 230u);
   EXPECT_EQ(Odometry::kPayloadBytes, 233u);
   EXPECT_EQ(VisionPositionDelta::kPayloadBytes, 44u);

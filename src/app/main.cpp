@@ -70,6 +70,10 @@ int main(int argc, char** argv) {
   app.add_option("--calibrate", options.calibration_path,
                  "measure the sensor's constants against the recording's ground truth (latencies, depth noise) and "
                  "write them with the whole configuration to this YAML file, for --config");
+  app.add_option("--imu", options.imu_path,
+                 "a replay's gyro, 'timestamp wx wy wz' lines (rad/s, body FRD, the recording's clock), against which "
+                 "the frames' capture latency is measured and applied (default: imu.txt in the tum: directory, if any)")
+      ->check(CLI::ExistingFile);
   app.add_option("--max-frames", options.max_frames, "stop after this many frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_flag("--start-at-groundtruth", options.start_at_groundtruth,
                "start the trajectory at the first frame's ground-truth pose");

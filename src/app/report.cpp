@@ -161,4 +161,32 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   print_time_offset(out, "tz (depth)", s.depth_time_offset, 1e3, "mm");
 }
 
+void print_capture_timing(std::ostream& out, const CaptureTiming& timing, const Config& config, const RealtimeStats& run,
+                          bool live) {
+  if (!timing.gyro) {
+    out << "  capture latency: not measured (no gyro: a replay's imu.txt or --imu, live the autopilot's ATTITUDE);"
+           " the stamps stand, covered by covariance.colour_latency_sigma_s\n";
+    return;
+  }
+  out << "  " << capture_latency_text(timing)
+      << "; every motion stamped at its capture instant: the log's t_prev/t_curr and ODOMETRY time_usec are the "
+         "stamps less the latency applied\n";
+  const BodyConfig& b = config.body;
+  const std::string mount =
+      mount_text(timing, b.camera_roll_deg, b.camera_pitch_deg, b.camera_yaw_deg, config.latency.mount_warning_deg);
+  out << "  " << (mount.empty() ? "mount: not measured (too little rotation about two axes)" : mount) << "\n";
+  if (!timing.known) return;
+  // Capture to the autopilot: the latency applied, then stamp to hand-over as measured live.
+  const double stamp_to_output_ms = live && run.latency.count() > 0 ? run.latency.quantile_ms(0.5) : 0;
+  const double worst_ms = live && run.latency.count() > 0 ? run.latency.quantile_ms(0.99) : 0;
+  const double capture_ms = timing.applied_s * 1e3;
+  out << std::fixed << std::setprecision(0) << "  autopilot settings: PX4 EKF2_EV_DELAY 0 ms once its TIMESYNC has "
+         "converged (time_usec is the capture instant; before that PX4 stamps arrival: capture to arrival "
+      << capture_ms + stamp_to_output_ms << " ms), EKF2_DELAY_MAX at least " << capture_ms + worst_ms + 20
+      << " ms; ArduPilot VISO_DELAY_MS " << capture_ms + stamp_to_output_ms
+      << " ms (capture to arrival: it maps time_usec to arrival)"
+      << (live ? "" : " plus the link's transport and this computer's processing time, which a replay does not show")
+      << "\n";
+}
+
 }  // namespace rgbdo

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <ostream>
@@ -16,6 +17,7 @@
 #include "rgbd_odometry/core/time_format.hpp"
 #include "rgbd_odometry/io/config_file.hpp"
 #include "rgbd_odometry/eval/evaluate.hpp"
+#include "rgbd_odometry/io/imu_file.hpp"
 #include "rgbd_odometry/io/odometry_log.hpp"
 #include "rgbd_odometry/link/flight_link.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
@@ -95,8 +97,28 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
 
-  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
   const auto* tum = dynamic_cast<const TumFeed*>(feed.get());
+  // The gyro the frames' capture latency is measured against: a replay's file (--imu, or the
+  // recording's imu.txt), else, live, the followed autopilot's.
+  std::unique_ptr<ImuFile> imu_file;
+  GyroFeed* gyro = nullptr;
+  try {
+    std::string imu_path = options.imu_path;
+    if (imu_path.empty() && tum && std::filesystem::exists(tum->sequence().directory + "/imu.txt"))
+      imu_path = tum->sequence().directory + "/imu.txt";
+    if (!imu_path.empty()) {
+      imu_file = std::make_unique<ImuFile>(imu_path);
+      gyro = imu_file.get();
+    }
+  } catch (const SourceError& e) {
+    err << "rgbd-odometry: " << e.what() << "\n";
+    return 1;
+  }
+  if (!gyro && flight && feed->live()) gyro = &flight->gyro();
+  if (gyro && config.latency.enabled)
+    err << "rgbd-odometry: capture latency measured against the gyro of " << gyro->description() << "\n";
+
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
   if (options.start_at_groundtruth && tum && !tum->sequence().frames.empty()) {
     const auto gt = groundtruth.at(tum->sequence().frames.front().t_colour_ns);
     if (!gt) {
@@ -134,6 +156,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   sinks.push_back(std::make_unique<EvaluationSink>(evaluator, origin));
   if (!options.quiet) sinks.push_back(std::make_unique<ConsoleSink>(out, options.verbose));
   PairTallies tallies;
+  CaptureTiming timing;  // as of the last pair
   ResourceSampler resources;
   size_t pair_count = 0;
   std::string output_error;
@@ -159,6 +182,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
       }
       if (r.status == Status::Ok) integrator.add(r.T_prev_curr);
       tallies.add(r);
+      timing = r.timing;
       for (const auto& sink : sinks) sink->pair(item, pair_count, integrator.pose());
       ++pair_count;
     } catch (const std::exception& e) {
@@ -171,7 +195,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
   g_stop = false;
   RealtimeStats run;
   try {
-    RealtimePipeline pipeline(config, *feed, on_output, on_message);
+    RealtimePipeline pipeline(config, *feed, on_output, on_message, gyro);
     if (flight) {
       // The link's own status line beside the runtime's (every 10 s), and its news at once:
       // an autopilot appearing or going is told within one tick of being noticed.
@@ -208,6 +232,7 @@ int run_odometry(const RunOptions& options, std::ostream& out, std::ostream& err
     }
   }
   print_summary(out, evaluator.summary(), evaluator.has_groundtruth(), tallies, run);
+  print_capture_timing(out, timing, config, run, feed->live());
   if (!options.calibration_path.empty()) {
     const Calibration calibration = calibrate(config, evaluator.summary(), tallies.sensor);
     std::ofstream file(options.calibration_path);

@@ -86,6 +86,13 @@ std::vector<Param> param_table(Config& c) {
       {"refinement.distrusted_sigma_scale", "", "where the learnt factors or lag refuse fusion, the alignment is fused with its sigma in sideways translation scaled by this fixed factor instead; 0: the features stand alone", &c.refinement.distrusted_sigma_scale, 0, 1e6},
       {"refinement.distrusted_sigma_scale_optical_axis", "", "the same for its translation along the optical axis, which the depth's lag and distortion move most", &c.refinement.distrusted_sigma_scale_optical_axis, 1, 1e6},
       {"refinement.distrusted_sigma_scale_rotation", "", "the same for its rotation", &c.refinement.distrusted_sigma_scale_rotation, 1, 1e6},
+      {"latency.enabled", "", "measure when the frames were taken against the autopilot's gyro (live: its ATTITUDE; replay: imu.txt or --imu) and stamp every motion then", &c.latency.enabled},
+      {"latency.min_s", "s", "the latencies searched (stamp minus capture instant, on the gyro's clock): from", &c.latency.min_s, -1, 1},
+      {"latency.max_s", "s", "to", &c.latency.max_s, -1, 1},
+      {"latency.memory_s", "s", "a moving camera's evidence fades over this long, so a slowly changing latency is followed; at rest nothing fades", &c.latency.memory_s, 1, 1e6},
+      {"latency.converged_sigma_s", "s", "applied once known to this standard error", &c.latency.converged_sigma_s, 1e-5, 1, true},
+      {"latency.max_slew", "s/s", "the applied latency moves towards the estimate at most this fast (seconds per second of frames)", &c.latency.max_slew, 1e-4, 0.5},
+      {"latency.mount_warning_deg", "deg", "a camera mount measured against the gyro further than this from body.* is warned about", &c.latency.mount_warning_deg, 0.1, 180},
       {"sensor.fps", "Hz", "live sensor frame rate", &c.sensor.fps, 1, 120},
       {"sensor.registration", "", "hardware depth-to-colour registration", &c.sensor.registration},
       {"sensor.frame_timeout_ms", "ms", "no frame this long: the sensor is reported lost", &c.sensor.frame_timeout_ms, 100, 600000},
@@ -115,6 +122,7 @@ std::vector<Param> param_table(Config& c) {
       {"link.timesync_rate_hz", "Hz", "our TIMESYNC requests while an autopilot is up; 0: none", &c.link.timesync_rate_hz, 0.0, 20},
       {"link.timesync_max_rtt_ms", "ms", "slower answers are not used for our clock offset", &c.link.timesync_max_rtt_ms, 0.1, 10000},
       {"link.ekf_origin", "deg, deg, m", "LATITUDE, LONGITUDE, ALTITUDE (AMSL) sent as SET_GPS_GLOBAL_ORIGIN and SET_HOME_POSITION (ArduPilot needs it without GPS); empty: none", &c.link.ekf_origin},
+      {"link.attitude_rate_hz", "Hz", "the autopilot's ATTITUDE (its gyro rates, for latency.*) asked for at this rate; 0: not asked", &c.link.attitude_rate_hz, 0.0, 500},
       {"link.delta_min_interval_ms", "ms", "VISION_POSITION_DELTA composed over at least this (ArduPilot drops closer ones: 50)", &c.link.delta_min_interval_ms, 0.0, 1000},
       {"seed", "", "seeds RANSAC and the perturbations with each pair's content: the same frames, the same result", &c.seed, 0, 2147483647},  // a file's integers are 32-bit (OpenCV's reader)
   };
@@ -318,6 +326,8 @@ void validate(const Config& config) {
     throw ConfigError("config key 'refinement.stride_px': fewer than 4 grid rows in the image");
   if (c.ransac.min_inliers < 3)
     throw ConfigError("config key 'ransac.min_inliers': a rigid motion needs at least 3");
+  if (c.latency.max_s - c.latency.min_s < 0.01)
+    throw ConfigError("config key 'latency.max_s': must be at least 10 ms above latency.min_s");
   (void)parse_cpu_list(c.runtime.cpu_affinity);
   if (c.link.velocity_error_min_mps >= c.link.velocity_error_max_mps)
     throw ConfigError("config key 'link.velocity_error_min_mps': must be below link.velocity_error_max_mps");

@@ -21,6 +21,9 @@ constexpr double kFrameRateHz = 30.0;  // the sensor's rate, for the serial capa
 // comes back (it may have rebooted and lost it): a lost datagram costs one copy, not the flight.
 constexpr int kOriginRepeats = 5;
 constexpr std::int64_t kOriginPeriodNs = 1'000'000'000;
+// MAV_CMD_SET_MESSAGE_INTERVAL is sent until acknowledged, this many times a second apart.
+constexpr int kIntervalRequests = 5;
+constexpr std::int64_t kIntervalRequestPeriodNs = 1'000'000'000;
 // PX4 uses a TIMESYNC round trip only below this (Timesync.hpp MAX_RTT_SAMPLE, 10 ms).
 constexpr std::int64_t kPx4MaxRttNs = 10'000'000;
 // An ATTITUDE older than this at the first pair says nothing about the vehicle then (PX4 streams
@@ -79,17 +82,6 @@ std::string describe(const GeoPoint& origin) {
 }
 
 }  // namespace
-
-CameraExtrinsic extrinsic_from(const BodyConfig& body) {
-  CameraExtrinsic x;
-  const Eigen::Matrix3d mount = (Eigen::AngleAxisd(body.camera_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(body.camera_pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(body.camera_roll_deg * kDegToRad, Eigen::Vector3d::UnitX()))
-                                    .toRotationMatrix();
-  x.R_body_camera = mount * CameraExtrinsic::forward_looking_rotation();
-  x.p_body_camera_m = Eigen::Vector3d(body.camera_x_m, body.camera_y_m, body.camera_z_m);
-  return x;
-}
 
 FlightLink::FlightLink(const Config& config)
     : config_(config.link), options_(parse_link_uri(config.link.uri)), link_(open_link(options_)),
@@ -156,11 +148,11 @@ void FlightLink::receive_loop() {
     const ReceiveResult got = link_->receive(receive_buffer_, kReceivePoll_ms);
     if (got.bytes == 0) continue;
     const std::int64_t now_ns = steady_now_ns();
-    // A datagram holds whole frames: what is left of the previous one is not continued.
-    if (got.datagram) parser_.reset();
     bool sender_confirmed = !got.datagram;  // serial: there is only one far end
-    parser_.feed(std::span<const std::uint8_t>(receive_buffer_.data(), got.bytes),
-                 [&](const mavlink::ReceivedFrame& frame) { handle(frame, now_ns, sender_confirmed); });
+    const auto on_frame = [&](const mavlink::ReceivedFrame& frame) { handle(frame, now_ns, sender_confirmed); };
+    parser_.feed(std::span<const std::uint8_t>(receive_buffer_.data(), got.bytes), on_frame);
+    // A datagram holds whole frames: what is left unfinished was a false start, never continued.
+    if (got.datagram) parser_.end_datagram(on_frame);
     std::lock_guard lock(state_mutex_);
     parser_counts_ = parser_.counts();
   }
@@ -179,12 +171,26 @@ bool FlightLink::handle(const mavlink::ReceivedFrame& frame, std::int64_t now_ns
       link_->reply_to_last_sender();
       sender_confirmed = true;
     }
-    if (watch_.state(now_ns).identity != before) timesync_.reset();  // another autopilot, another clock
+    if (watch_.state(now_ns).identity != before) {  // another autopilot, another clock
+      timesync_.reset();
+      gyro_.clear();
+      interval_result_.reset();
+    }
     const AutopilotIdentity followed = watch_.state(now_ns).identity;
-    if (frame.msgid == mavlink::Attitude::kId && frame.sysid == followed.system_id &&
-        frame.compid == followed.component_id) {  // the autopilot's own, not a gimbal's
+    const bool from_autopilot = frame.sysid == followed.system_id && frame.compid == followed.component_id;
+    if (frame.msgid == mavlink::Attitude::kId && from_autopilot) {  // the autopilot's own, not a gimbal's
       const mavlink::Attitude a = mavlink::unpack_attitude(frame.payload);
       if (std::isfinite(a.roll) && std::isfinite(a.pitch)) attitude_ = {a.roll, a.pitch, now_ns};
+      const TimesyncEstimate offset = timesync_.estimate();
+      gyro_.add(a.time_boot_ms, a.rollspeed, a.pitchspeed, a.yawspeed,
+                offset.valid ? std::optional<std::int64_t>(offset.offset_ns) : std::nullopt);
+      return true;
+    }
+    if (frame.msgid == mavlink::CommandAck::kId && from_autopilot) {
+      const mavlink::CommandAck ack = mavlink::unpack_command_ack(frame.payload);
+      if (ack.command == mavlink::kMavCmdSetMessageInterval &&
+          (ack.target_system == 0 || ack.target_system == own_system))
+        interval_result_ = ack.result;
       return true;
     }
     if (frame.msgid != mavlink::Timesync::kId) return true;
@@ -240,6 +246,51 @@ void FlightLink::tick(std::int64_t now_ns) {
   }
   note_changes(now_ns);
   send_origin(now_ns);
+  ask_attitude_rate(now_ns);
+}
+
+void FlightLink::ask_attitude_rate(std::int64_t now_ns) {
+  if (config_.attitude_rate_hz <= 0) return;
+  std::optional<std::uint8_t> result;
+  AutopilotIdentity target;
+  {
+    std::lock_guard lock(state_mutex_);
+    result = interval_result_;
+    const AutopilotState ap = watch_.state(now_ns);
+    if (!ap.up) return;
+    target = ap.identity;
+  }
+  if (result) {
+    if (!interval_reported_) {
+      interval_reported_ = true;
+      char text[200];
+      if (*result == mavlink::kMavResultAccepted)
+        std::snprintf(text, sizeof text, "ATTITUDE at %.0f Hz accepted by the autopilot (its rates time the frames)",
+                      config_.attitude_rate_hz);
+      else
+        std::snprintf(text, sizeof text,
+                      "ATTITUDE at %.0f Hz refused by the autopilot (MAV_RESULT %d): the rates it streams anyway are "
+                      "used (ArduPilot: SRn_EXTRA1)",
+                      config_.attitude_rate_hz, *result);
+      news_.push_back(text);
+    }
+    return;
+  }
+  if (interval_requests_left_ <= 0 || now_ns < next_interval_request_ns_) return;
+  mavlink::CommandLong command;
+  command.command = mavlink::kMavCmdSetMessageInterval;
+  command.param[0] = static_cast<float>(mavlink::Attitude::kId);
+  command.param[1] = static_cast<float>(1e6 / config_.attitude_rate_hz);  // interval, microseconds
+  command.target_system = target.system_id;
+  command.target_component = target.component_id;
+  command.confirmation = static_cast<std::uint8_t>(kIntervalRequests - interval_requests_left_);
+  send_message(command);
+  if (--interval_requests_left_ == 0 && !interval_reported_) {
+    interval_reported_ = true;
+    news_.push_back("no answer to " + std::to_string(kIntervalRequests) +
+                    " requests for ATTITUDE (MAV_CMD_SET_MESSAGE_INTERVAL): the rates it streams anyway are used");
+  }
+  next_interval_request_ns_ = now_ns + kIntervalRequestPeriodNs;
 }
 
 void FlightLink::level_local_frame() {
@@ -320,6 +371,11 @@ void FlightLink::note_changes(std::int64_t now_ns) {
   if (ap.known && ap.up && (!reported_.up || ap.identity != reported_.identity)) {
     origin_sends_left_ = kOriginRepeats;  // heard, or back (perhaps rebooted): the origin again
     next_origin_ns_ = now_ns;
+    interval_requests_left_ = kIntervalRequests;  // and the ATTITUDE rate asked for again
+    next_interval_request_ns_ = now_ns;
+    interval_reported_ = false;
+    std::lock_guard lock(state_mutex_);
+    interval_result_.reset();
   }
   reported_ = ap;
   if (offset.valid && !reported_offset_) {
@@ -422,6 +478,8 @@ std::string FlightLink::status_line() const {
       s << " OVER PX4's 10 ms: set EKF2_EV_DELAY " << std::lround(advised_ev_delay_ms(r.timesync)) << " ms";
     s << ", " << r.timesync_requests_answered << " of its TIMESYNC requests answered";
     if (origin_) s << ", EKF origin sent " << origins_sent_ << " times";
+    const AutopilotGyro::Counts g = gyro_.counts();
+    s << ", " << g.received << " ATTITUDE rates (" << g.unmapped << " before the clock offset)";
   }
   if (const std::string peer = link_->peer(); !peer.empty()) s << "; peer " << peer;
   if (std::holds_alternative<UdpLinkOptions>(options_) && std::get<UdpLinkOptions>(options_).listen && link_->peer().empty())

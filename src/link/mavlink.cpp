@@ -9,6 +9,11 @@ namespace {
 // the host is, and MAVLink's field order is not C's layout.
 void put_u8(std::span<std::uint8_t> out, std::size_t offset, std::uint8_t v) { out[offset] = v; }
 
+void put_u16(std::span<std::uint8_t> out, std::size_t offset, std::uint16_t v) {
+  out[offset] = static_cast<std::uint8_t>(v);
+  out[offset + 1] = static_cast<std::uint8_t>(v >> 8);
+}
+
 void put_u32(std::span<std::uint8_t> out, std::size_t offset, std::uint32_t v) {
   for (std::size_t i = 0; i < 4; ++i) out[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
 }
@@ -143,6 +148,32 @@ void pack_payload(const Attitude& m, std::span<std::uint8_t, Attitude::kPayloadB
   put_f32(out, Attitude::kYawspeedOffset, m.yawspeed);
 }
 
+void pack_payload(const CommandLong& m, std::span<std::uint8_t, CommandLong::kPayloadBytes> out) {
+  put_f32_array(out, CommandLong::kParamOffset, m.param);
+  put_u16(out, CommandLong::kCommandOffset, m.command);
+  put_u8(out, CommandLong::kTargetSystemOffset, m.target_system);
+  put_u8(out, CommandLong::kTargetComponentOffset, m.target_component);
+  put_u8(out, CommandLong::kConfirmationOffset, m.confirmation);
+}
+
+void pack_payload(const CommandAck& m, std::span<std::uint8_t, CommandAck::kPayloadBytes> out) {
+  put_u16(out, CommandAck::kCommandOffset, m.command);
+  put_u8(out, CommandAck::kResultOffset, m.result);
+  put_u8(out, CommandAck::kProgressOffset, 0);
+  put_u32(out, CommandAck::kResultParam2Offset, 0);
+  put_u8(out, CommandAck::kTargetSystemOffset, m.target_system);
+  put_u8(out, CommandAck::kTargetComponentOffset, m.target_component);
+}
+
+CommandAck unpack_command_ack(std::span<const std::uint8_t, kMaxPayloadBytes> payload) {
+  CommandAck m;
+  m.command = static_cast<std::uint16_t>(get_le(payload, CommandAck::kCommandOffset, 2));
+  m.result = payload[CommandAck::kResultOffset];
+  m.target_system = payload[CommandAck::kTargetSystemOffset];
+  m.target_component = payload[CommandAck::kTargetComponentOffset];
+  return m;
+}
+
 Attitude unpack_attitude(std::span<const std::uint8_t, kMaxPayloadBytes> payload) {
   const auto f32 = [&](std::size_t offset) {
     return std::bit_cast<float>(static_cast<std::uint32_t>(get_le(payload, offset, 4)));
@@ -166,6 +197,7 @@ std::optional<std::uint8_t> sent_crc_extra(std::uint32_t msgid) {
     case VisionPositionDelta::kId: return VisionPositionDelta::kCrcExtra;
     case SetGpsGlobalOrigin::kId: return SetGpsGlobalOrigin::kCrcExtra;
     case SetHomePosition::kId: return SetHomePosition::kCrcExtra;
+    case CommandLong::kId: return CommandLong::kCrcExtra;
     default: return std::nullopt;
   }
 }
@@ -225,5 +257,7 @@ std::size_t Framer::encode(const VisionPositionDelta& m, FrameSpan out) { return
 std::size_t Framer::encode(const SetGpsGlobalOrigin& m, FrameSpan out) { return encode_message(m, out); }
 std::size_t Framer::encode(const SetHomePosition& m, FrameSpan out) { return encode_message(m, out); }
 std::size_t Framer::encode(const Attitude& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const CommandLong& m, FrameSpan out) { return encode_message(m, out); }
+std::size_t Framer::encode(const CommandAck& m, FrameSpan out) { return encode_message(m, out); }
 
 }  // namespace rgbdo::mavlink

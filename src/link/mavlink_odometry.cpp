@@ -39,10 +39,6 @@ BodyMotion body_motion(const PairResult& pair, const CameraExtrinsic& X) {
   return m;
 }
 
-Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R) {
-  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0)), std::atan2(R(1, 0), R(0, 0))};
-}
-
 Eigen::Matrix3d euler_zyx_jacobian_left(const Eigen::Matrix3d& R) {
   // Left perturbation exp(dth) R: dth is the angular velocity in the local frame, which the
   // Euler rates make as w = Rz Ry e_x droll + Rz e_y dpitch + e_z dyaw. This is the inverse

@@ -5,13 +5,19 @@
 
 namespace rgbdo::mavlink {
 
-std::optional<std::uint8_t> crc_extra_of(std::uint32_t msgid) {
+std::optional<CheckedMessage> checked_message(std::uint32_t msgid) {
   switch (msgid) {
-    case Heartbeat::kId: return Heartbeat::kCrcExtra;
-    case Timesync::kId: return Timesync::kCrcExtra;
-    case Attitude::kId: return Attitude::kCrcExtra;
+    case Heartbeat::kId: return CheckedMessage{Heartbeat::kCrcExtra, Heartbeat::kPayloadBytes};
+    case Timesync::kId: return CheckedMessage{Timesync::kCrcExtra, Timesync::kPayloadBytes};
+    case Attitude::kId: return CheckedMessage{Attitude::kCrcExtra, Attitude::kPayloadBytes};
+    case CommandAck::kId: return CheckedMessage{CommandAck::kCrcExtra, CommandAck::kPayloadBytes};
     default: return std::nullopt;
   }
+}
+
+std::optional<std::uint8_t> crc_extra_of(std::uint32_t msgid) {
+  const auto m = checked_message(msgid);
+  return m ? std::optional<std::uint8_t>(m->crc_extra) : std::nullopt;
 }
 
 std::size_t FrameParser::append(std::span<const std::uint8_t> bytes) {
@@ -63,25 +69,29 @@ bool FrameParser::next_frame(ReceivedFrame& out) {
       out.compid = start[4];
       out.msgid = start[5];
     }
-    const bool is_signed = (incompat & kIncompatFlagSigned) != 0;
-    const std::size_t frame_bytes = header + length + kChecksumBytes + (is_signed ? kSignatureBytes : 0);
-    if (available < frame_bytes) return false;
-
-    if ((incompat & ~kIncompatFlagSigned) != 0) {
-      // The protocol says to drop what we cannot interpret; its length may not mean what we think.
-      ++counts_.unsupported_flags;
+    // Decided on the header alone, without waiting for the rest: a start byte that cannot
+    // begin a frame we can check (flags we do not know, an id we have no CRC_EXTRA for, a
+    // length the message cannot have) is passed over, and the search goes on from the byte
+    // after it. Its length field is not trusted: after a false start in noise it would
+    // swallow the good frame that follows.
+    const std::optional<CheckedMessage> message = checked_message(out.msgid);
+    if ((incompat & ~kIncompatFlagSigned) != 0 || !message || length > message->max_payload_bytes) {
+      if ((incompat & ~kIncompatFlagSigned) != 0)
+        ++counts_.unsupported_flags;
+      else if (!message)
+        ++counts_.unknown_ids;
+      else
+        ++counts_.crc_errors;
       ++counts_.bytes_discarded;
       ++scan_;
       continue;
     }
-    const std::optional<std::uint8_t> crc_extra = crc_extra_of(out.msgid);
-    if (!crc_extra) {
-      ++counts_.unknown_ids;
-      scan_ += frame_bytes;
-      continue;
-    }
+    const bool is_signed = (incompat & kIncompatFlagSigned) != 0;
+    const std::size_t frame_bytes = header + length + kChecksumBytes + (is_signed ? kSignatureBytes : 0);
+    if (available < frame_bytes) return false;
+
     std::uint16_t crc = crc16_mcrf4xx(std::span<const std::uint8_t>(start + 1, header - 1 + length));
-    crc = crc_accumulate(*crc_extra, crc);
+    crc = crc_accumulate(message->crc_extra, crc);
     const std::uint16_t received =
         static_cast<std::uint16_t>(start[header + length] | (start[header + length + 1] << 8));
     if (crc != received) {

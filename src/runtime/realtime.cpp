@@ -15,6 +15,7 @@
 #include "rgbd_odometry/runtime/frame_mailbox.hpp"
 #include "rgbd_odometry/runtime/worker_pool.hpp"
 #include "rgbd_odometry/sensor/usb_devices.hpp"
+#include "rgbd_odometry/pipeline/capture_latency.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 
@@ -59,7 +60,7 @@ void pin_thread(const std::vector<int>& cpus, int role) {
 // One run's shared state; every thread function is a member.
 class Run {
  public:
-  Run(const Config& config, FrameFeed& feed, const RealtimePipeline::OutputFn& on_output,
+  Run(const Config& config, FrameFeed& feed, GyroFeed* gyro, const RealtimePipeline::OutputFn& on_output,
       const RealtimePipeline::MessageFn& on_message, const std::function<void()>& on_tick)
       : on_tick_(on_tick), config_(config), cpus_(parse_cpu_list(config.runtime.cpu_affinity)), feed_(feed), on_output_(on_output),
         on_message_(on_message),
@@ -69,7 +70,8 @@ class Run {
                                                  [this](int worker) { pin_thread(cpus_, 4 + worker); })
                   : nullptr),
         extractor_(config, pool_.get()),
-        estimator_(config) {
+        estimator_(config),
+        capture_clock_(config, gyro) {
     check_cpus_allowed(cpus_);
     // USB hot-plug tells when a sensor comes back sooner than the next re-open attempt would.
     if (feed.live()) usb_ = std::make_unique<UsbWatcher>();
@@ -260,9 +262,12 @@ class Run {
         r.features_prev = static_cast<int>(prev.frame.features.keypoints.size());
         r.features_curr = static_cast<int>(curr.frame.features.keypoints.size());
         estimator_.forget_motion();
+        capture_clock_.forget();
       } else {
+        estimator_.set_colour_latency_sigma(capture_clock_.colour_latency_sigma_s());
         out.result = estimator_.estimate(prev.frame, curr.frame);
       }
+      if (!PairEstimator::dropped_frame(out.result)) capture_clock_.stamp(out.result);
       out.result.times.detect_ms = curr.detect_ms;
     }
     const bool kept = !(out.has_pair && PairEstimator::dropped_frame(out.result));
@@ -276,6 +281,7 @@ class Run {
     auto next_status = Clock::now() + kStatusPeriod;
     std::uint64_t frames_at_status = 0, usb_departures = 0;
     SensorEstimates learnt;  // as of the last good pair
+    CaptureTiming timing;    // as of the last pair
     if (usb_ && !usb_->problem().empty()) on_message_(usb_->problem());
     for (;;) {
       auto item = outputs_.pop_for(kPoll);
@@ -294,6 +300,7 @@ class Run {
           item->latency_ms = static_cast<double>(steady_now_ns() - item->t_capture_host_ns) * 1e-6;
           stats_.latency.add(item->latency_ms);
           if (item->result.status == Status::Ok) learnt = item->result.sensor;
+          timing = item->result.timing;
         }
         on_output_(*item);
       } else if (outputs_.closed_and_empty()) {
@@ -306,7 +313,13 @@ class Run {
           << " dropped by the sensor, latency median " << stats_.latency.quantile_ms(0.5) << " ms, p99 "
           << stats_.latency.quantile_ms(0.99) << " ms";
         if (learnt.depth_sigma_scale_t > 0) s << "; " << sensor_estimates_text(learnt);
+        if (timing.gyro) s << "; " << capture_latency_text(timing);
         on_message_(s.str());
+        const BodyConfig& b = config_.body;
+        if (const std::string mount = mount_text(timing, b.camera_roll_deg, b.camera_pitch_deg, b.camera_yaw_deg,
+                                                 config_.latency.mount_warning_deg);
+            !mount.empty())
+          on_message_(mount);
         frames_at_status = stats_.frames;
         next_status += kStatusPeriod;
       }
@@ -340,6 +353,7 @@ class Run {
   std::unique_ptr<WorkerPool> pool_;  // the extraction's helpers (before extractor_: outlives it)
   FrameExtractor extractor_;  // the extraction thread's
   PairEstimator estimator_;   // the estimation thread's
+  CaptureClock capture_clock_;  // the estimation thread's: when the frames were taken
   std::array<ProcessedSlot, kProcessedSlots> slots_;
   BoundedQueue<int, kProcessedSlots> free_, ready_;
   BoundedQueue<PairOutput, kOutputDepth> outputs_;
@@ -352,11 +366,12 @@ class Run {
 
 }  // namespace
 
-RealtimePipeline::RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message)
-    : config_(config), feed_(feed), on_output_(std::move(on_output)), on_message_(std::move(on_message)) {}
+RealtimePipeline::RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message,
+                                   GyroFeed* gyro)
+    : config_(config), feed_(feed), gyro_(gyro), on_output_(std::move(on_output)), on_message_(std::move(on_message)) {}
 
 RealtimeStats RealtimePipeline::run(const std::atomic<bool>& stop) {
-  auto run = std::make_unique<Run>(config_, feed_, on_output_, on_message_, on_tick_);
+  auto run = std::make_unique<Run>(config_, feed_, gyro_, on_output_, on_message_, on_tick_);
   return run->go(stop);
 }
 

@@ -180,15 +180,17 @@ function main() {
     trueOffsetUs: truthUs, heartbeatsSent: 0, requestsSent: 0, answersReceived: 0, answersUsed: 0,
     answersRttRejected: 0, answersNotOurs: 0, causalityViolations: 0, ourAnswersToProgram: 0,
     programHeartbeats: 0, programRequests: 0, odometry: 0, framesFromProgram: 0, badFromProgram: 0,
-    origins: [], homePositions: [], visionPositionDelta: 0, attitudeSent: 0,
+    origins: [], homePositions: [], visionPositionDelta: 0, attitudeSent: 0, intervalRequests: [],
     rules: { staleFused: 0, notAfterPrevious: 0, deltaDropped: 0, beforeOrigin: 0 },
-    framesDropped: 0, framesReordered: 0, garbageBytes: 0, corruptFrames: 0, unknownFrames: 0, v1Frames: 0,
+    framesDropped: 0, framesReordered: 0, garbageBytes: 0, startByteNoise: 0, requestsDelivered: 0,
+    requestsDeliveredWhileHeard: 0, corruptFrames: 0, unknownFrames: 0, v1Frames: 0,
     signedFrames: 0, silentPeriods: 0, converged: false, convergedAfterSamples: null, offsetUs: null,
     offsetErrorUs: null, minRttUs: null, maxUsedRttUs: null, odometryLatencyUs: null, failures: [],
   };
   const estimator = new Px4TimesyncEstimator();
   let lastOdometryUs = null, lastDeltaUs = null;
   const outstanding = new Map();  // ts1 (string) -> true: our requests not answered yet
+  const requestTimes = [];  // when each request that went out was sent (our monotonic clock)
   const odometryStamps = [];  // [time_usec (program clock), arrival (our clock, us)]
   const capture = opt.capture ? fs.openSync(opt.capture, 'w') : null;
 
@@ -209,7 +211,13 @@ function main() {
   function noise() {
     const parts = [];
     const kind = random();
-    if (kind < 0.3) {  // plain noise, no start bytes
+    if (kind < 0.15) {  // noise of every byte value: start bytes, false headers with any length and id
+      const n = 1 + Math.floor(random() * 40);
+      const b = Buffer.alloc(n);
+      for (let i = 0; i < n; i++) b[i] = Math.floor(random() * 256);
+      if (random() < 0.5) b[Math.floor(random() * n)] = random() < 0.5 ? 0xFD : 0xFE;  // a false start for sure
+      r.garbageBytes += n; r.startByteNoise++; parts.push(b);
+    } else if (kind < 0.3) {  // plain noise, no start bytes
       const n = 1 + Math.floor(random() * 40);
       const b = Buffer.alloc(n);
       for (let i = 0; i < n; i++) { let v = Math.floor(random() * 256); if (v === 0xFD || v === 0xFE) v = 0x55; b[i] = v; }
@@ -234,15 +242,16 @@ function main() {
     }
     return parts;
   }
-  function send(buf) {
-    if (!peerKnown) return;
-    if (random() < opt.loss) { r.framesDropped++; return; }
+  function send(buf) {  // true when it goes out (now, or held back to follow the next)
+    if (!peerKnown) return false;
+    if (random() < opt.loss) { r.framesDropped++; return false; }
     const out = [];
     if (random() < opt.garbage) out.push(...noise());
     if (held) { out.push(buf, held); held = null; r.framesReordered++; }
     else if (random() < opt.reorder) { held = buf; }
     else out.push(buf);
     for (const b of out) writeBytes(b);
+    return true;
   }
 
   function heartbeat() {
@@ -325,6 +334,18 @@ function main() {
       lastOdometryUs = m.timeUsec;
       // EKF3 needs an origin (SET_GPS_GLOBAL_ORIGIN) to use an external position without GPS.
       if (opt.ardupilot && r.origins.length === 0) r.rules.beforeOrigin++;
+    } else if (id === common.CommandLong.MSG_ID) {
+      // MAV_CMD_SET_MESSAGE_INTERVAL, as PX4 and ArduPilot take it: the message streamed at
+      // the interval asked for, COMMAND_ACK ACCEPTED to the sender.
+      const m = packet.protocol.data(packet.payload, common.CommandLong);
+      r.intervalRequests.push({ command: m.command, messageId: m._param1, intervalUs: m._param2, confirmation: m.confirmation,
+        targetSystem: m.targetSystem, targetComponent: m.targetComponent });
+      if (m.command === 511 && silentUntilHeartbeats === null) {
+        const ack = new common.CommandAck();
+        ack.command = 511; ack.result = 0; ack.targetSystem = packet.header.sysid; ack.targetComponent = packet.header.compid;
+        send(frame(ack));
+        if (m._param1 === common.Attitude.MSG_ID && m._param2 > 0) streamAttitude(m._param2 / 1000);
+      }
     } else if (id === common.SetGpsGlobalOrigin.MSG_ID || id === common.SetHomePosition.MSG_ID) {
       // The EKF origin (ArduPilot needs one to use an external position without GPS).
       const home = id === common.SetHomePosition.MSG_ID;
@@ -349,6 +370,13 @@ function main() {
 
   // ---- our streams ----
   let timers = [];
+  let attitudeTimer = null, attitudeFn = null;
+  function streamAttitude(periodMs) {  // at the rate the program asked for
+    if (!attitudeFn) return;
+    if (attitudeTimer) { clearInterval(attitudeTimer); timers = timers.filter((t) => t !== attitudeTimer); }
+    attitudeTimer = setInterval(attitudeFn, periodMs); timers.push(attitudeTimer);
+    r.attitudePeriodMs = periodMs;
+  }
   function startTalking() {
     talking = true;
     const beat = () => {
@@ -362,7 +390,7 @@ function main() {
       outstanding.set(m.ts1.toString(), true);
       if (outstanding.size > 1000) outstanding.delete(outstanding.keys().next().value);
       r.requestsSent++;
-      send(frame(m));
+      if (send(frame(m))) requestTimes.push(monotonicNs());
     };
     // ATTITUDE at 10 Hz, as PX4 streams it on an Onboard port: the program levels its local
     // frame with the roll and pitch it holds at the first pair.
@@ -373,9 +401,10 @@ function main() {
       [m.roll, m.pitch] = opt.attitude; m.yaw = 1.2;
       r.attitudeSent++; send(frame(m));
     };
+    attitudeFn = opt.attitude ? attitude : null;
     beat();
     timers.push(setInterval(beat, 1000));
-    if (opt.attitude) { attitude(); timers.push(setInterval(attitude, 100)); }
+    if (opt.attitude) { attitude(); attitudeTimer = setInterval(attitude, 100); timers.push(attitudeTimer); }
     if (opt.timesyncHz > 0) timers.push(setInterval(ask, 1000 / opt.timesyncHz));
   }
 
@@ -392,6 +421,10 @@ function main() {
     r.highRttCount = estimator.highRttCount;
     r.offsetUs = estimator.sequence > 0 ? estimator.offsetUs : null;
     r.offsetErrorUs = r.offsetUs === null ? null : r.offsetUs - truthUs;
+    // The requests the program could answer: delivered while it was still sending, at least
+    // 100 ms before its last frame (what it answers is the share of these).
+    r.requestsDelivered = requestTimes.length;
+    if (lastRxNs !== null) r.requestsDeliveredWhileHeard = requestTimes.filter((t) => t < lastRxNs - 100_000_000n).length;
     if (r.converged && odometryStamps.length) {
       // What PX4's sync_stamp() makes of each ODOMETRY time_usec once converged: our clock
       // at capture; it must come before the message reached us.

@@ -33,6 +33,9 @@ import fs from 'node:fs';
 const MSG_HEARTBEAT = 0;
 const MSG_ODOMETRY = 331;
 const MSG_VPD = 11011;
+const MSG_COMMAND_LONG = 76;  // MAV_CMD_SET_MESSAGE_INTERVAL: the autopilot's ATTITUDE asked for
+const MAV_CMD_SET_MESSAGE_INTERVAL = 511;
+const MSG_ATTITUDE = 30;
 const MAV_TYPE_ONBOARD_CONTROLLER = 18;
 const MAV_AUTOPILOT_INVALID = 8;
 const MAV_FRAME_LOCAL_FRD = 20;
@@ -312,7 +315,7 @@ function main() {
   // ---- every packet ----
   let prevSeq = null;
   let seqGaps = 0;
-  const allowed = new Set([MSG_HEARTBEAT, ...opt.allowMsgid]);
+  const allowed = new Set([MSG_HEARTBEAT, MSG_COMMAND_LONG, ...opt.allowMsgid]);
   if (!opt.vpdOnly) allowed.add(MSG_ODOMETRY);
   if (opt.expectVpd) allowed.add(MSG_VPD);
   const odo = [];
@@ -342,6 +345,13 @@ function main() {
       odo.push({ p, nVpdBefore: vpd.length });
     } else if (p.msgid === MSG_VPD) {
       vpd.push({ p, nOdoBefore: odo.length });
+    } else if (p.msgid === MSG_COMMAND_LONG) {
+      // The one command the program sends: ATTITUDE at a rate, as the MAVLink spec words it
+      // (param1 the message id, param2 its interval in microseconds, the others 0).
+      expectEq(where, 'command', p.fields.command, MAV_CMD_SET_MESSAGE_INTERVAL);
+      expectEq(where, 'param1 (message id)', p.fields.param1, MSG_ATTITUDE);
+      if (!(p.fields.param2 > 0)) fail(where, `param2 (interval) ${p.fields.param2} us: not a rate`);
+      for (const k of ['param3', 'param4', 'param5', 'param6', 'param7']) expectEq(where, k, p.fields[k], 0);
     }
   }
   if (heartbeats < opt.minHeartbeats) fail('stream', `${heartbeats} HEARTBEAT message(s), expected at least ${opt.minHeartbeats}`);

@@ -30,4 +30,10 @@ struct PairTallies {
 void print_summary(std::ostream& out, const AccuracySummary& s, bool with_groundtruth, const PairTallies& tallies,
                    const RealtimeStats& run);
 
+// When the frames were taken, as measured against a gyro (nothing without one): the latency
+// applied to every motion, the camera's mount the gyro shows, and the autopilot settings that
+// follow (live: the capture-to-output latency measured in this run).
+void print_capture_timing(std::ostream& out, const CaptureTiming& timing, const Config& config, const RealtimeStats& run,
+                          bool live);
+
 }  // namespace rgbdo

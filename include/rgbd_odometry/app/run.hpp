@@ -18,6 +18,9 @@ struct RunOptions {
   bool verbose = false;         // per-pair stage times and counts
   bool start_at_groundtruth = false;  // trajectory origin: ground-truth pose of the first frame
   int max_frames = 0;           // 0: all
+  // A replay's gyro (io/imu_file.hpp); empty: the tum: directory's imu.txt if there is one,
+  // live the link's autopilot.
+  std::string imu_path;
   // Evaluation against ground truth (when the source has it): the allowance for its own noise
   // ("auto": estimated from it; "none"; "T_M,R_RAD") and a per-pair CSV for plots (empty: none).
   std::string groundtruth_allowance = "auto";

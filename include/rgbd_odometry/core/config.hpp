@@ -148,6 +148,26 @@ struct CovarianceConfig {
   double scale = 1.0;
 };
 
+// When the frames were taken, measured against the autopilot's gyro (pipeline/capture_latency.hpp):
+// live, the followed autopilot's ATTITUDE rates; a replay, the recording's imu.txt or --imu.
+// Without either, the stamps stand and the covariance keeps covariance.*_latency_sigma_s.
+struct LatencyConfig {
+  bool enabled = true;  // measure and apply it when there are gyro samples
+  // The offsets (stamp minus capture instant, on the gyro's clock) searched, seconds.
+  double min_s = -0.1, max_s = 0.25;
+  // What a moving camera's evidence is worth over time: older pairs weigh e^(-age / memory_s),
+  // so a latency that changes slowly (a host clock, a USB hub) is followed. A camera at rest
+  // forgets nothing: it shows nothing of the latency.
+  double memory_s = 30;
+  // Applied once its standard error is this small (before: the stamps, and the priors).
+  double converged_sigma_s = 0.005;
+  // How fast the applied latency may move towards the estimate: seconds per second of frames,
+  // so that no two frames change order and a consumer's velocities are not jolted.
+  double max_slew = 0.05;
+  // A measured camera mount further than this from body.* is warned about, degrees.
+  double mount_warning_deg = 5;
+};
+
 // A live OpenNI2 sensor (ignored for recorded sources).
 struct SensorConfig {
   int fps = 30;
@@ -214,6 +234,9 @@ struct LinkConfig {
   // uses no external position without an origin. Empty: none sent. In a file also as a list
   // [lat, lon, alt].
   std::string ekf_origin;
+  // The followed autopilot's ATTITUDE asked for at this rate (MAV_CMD_SET_MESSAGE_INTERVAL),
+  // for its gyro rates (latency.*); 0: not asked, whatever it streams is used.
+  double attitude_rate_hz = 50;
   // VISION_POSITION_DELTA: pairs composed until they span at least this long. ArduPilot's EKF3
   // drops deltas closer together than its sensorIntervalMin_ms (50 ms, AP_NavEKF3).
   double delta_min_interval_ms = 50;
@@ -233,6 +256,7 @@ struct Config {
   RansacConfig ransac;
   CovarianceConfig covariance;
   RefinementConfig refinement;
+  LatencyConfig latency;
   SensorConfig sensor;
   RuntimeConfig runtime;
   LogConfig log;

@@ -21,7 +21,9 @@ struct StageTimes {  // wall time of each stage for this pair, milliseconds
 };
 
 struct PairResult {
-  std::int64_t t_prev_ns = 0;  // colour capture times of the two frames
+  // Capture times of the two frames' colour images: their stamps, or, where the latency is
+  // measured against the autopilot's gyro, the stamps less the latency (timing.applied_s).
+  std::int64_t t_prev_ns = 0;
   std::int64_t t_curr_ns = 0;
   Status status = Status::Ok;
   int features_prev = 0, features_curr = 0;
@@ -34,6 +36,7 @@ struct PairResult {
   int depth_points = 0;  // depth points of the alignment fused with the features; 0: features alone
   bool depth_trusted = false;  // fused at the learnt trust, not at refinement.distrusted_sigma_scale
   SensorEstimates sensor;  // the sensor's constants as learnt up to this pair
+  CaptureTiming timing;    // t_prev_ns, t_curr_ns restamped at the capture instants, when a gyro is read
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
   StageTimes times;

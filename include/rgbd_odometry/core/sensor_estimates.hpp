@@ -1,6 +1,7 @@
 #pragma once
 // The sensor's constants as the pipeline learns them online, carried with each pair result
 // to the summary and the live status line.
+#include <cstdint>
 #include <string>
 
 namespace rgbdo {
@@ -19,5 +20,27 @@ struct SensorEstimates {
 
 // In a few words, for the summary and the status line.
 std::string sensor_estimates_text(const SensorEstimates& e);
+
+// When the frames were taken, as measured against the autopilot's gyro
+// (pipeline/capture_latency.hpp), and the camera's mount the same pairs show.
+struct CaptureTiming {
+  bool gyro = false;       // gyro samples are read (live: the autopilot's ATTITUDE; replay: imu.txt)
+  bool known = false;      // the latency is measured
+  double latency_s = 0;    // stamp minus capture instant, on the gyro's clock
+  double sigma_s = 0;      // its standard error
+  double applied_s = 0;    // what this pair's current frame was restamped by
+  std::uint64_t pairs = 0; // pairs measured against the gyro so far
+  bool mount_known = false;
+  double mount_roll_deg = 0, mount_pitch_deg = 0, mount_yaw_deg = 0;
+  int mount_pairs = 0;
+};
+
+// "capture latency 16.4 +- 0.9 ms against the gyro (applied 16.4 ms; 233 pairs)"; empty
+// without a gyro.
+std::string capture_latency_text(const CaptureTiming& t);
+// "mount measured against the autopilot's gyro: roll R pitch P yaw Y deg (configured: ...)",
+// "WARNING: ..." when an angle differs by more than warning_deg; empty when not measured.
+std::string mount_text(const CaptureTiming& t, double configured_roll_deg, double configured_pitch_deg,
+                       double configured_yaw_deg, double warning_deg);
 
 }  // namespace rgbdo

@@ -5,7 +5,9 @@
 // and says so). In: a receiver thread of its own reads the same socket or serial port, follows
 // the autopilot's HEARTBEAT (autopilot_watch.hpp), answers its TIMESYNC requests at once (so
 // PX4 can map our capture times onto its clock) and measures the autopilot's clock offset with
-// requests of ours (timesync.hpp).
+// requests of ours (timesync.hpp). It asks the autopilot for its ATTITUDE at
+// link.attitude_rate_hz (MAV_CMD_SET_MESSAGE_INTERVAL) and hands its rates, on our clock, to
+// the odometry's capture-latency estimate (gyro()).
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -17,6 +19,7 @@
 #include <vector>
 
 #include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/link/autopilot_gyro.hpp"
 #include "rgbd_odometry/link/autopilot_watch.hpp"
 #include "rgbd_odometry/link/mavlink.hpp"
 #include "rgbd_odometry/link/mavlink_odometry.hpp"
@@ -25,9 +28,6 @@
 #include "rgbd_odometry/link/transport.hpp"
 
 namespace rgbdo {
-
-// The camera-to-body extrinsic of body.* (config.hpp).
-CameraExtrinsic extrinsic_from(const BodyConfig& body);
 
 // What came back over the link.
 struct LinkReceiveStats {
@@ -64,6 +64,8 @@ class FlightLink {
   // Pairs whose message was held back: their capture time was not after the last one sent.
   std::uint64_t held_back() const { return held_back_; }
   LinkReceiveStats receive_stats() const;
+  // The followed autopilot's ATTITUDE rates on our clock, for the capture latency (any thread).
+  AutopilotGyro& gyro() { return gyro_; }
   // Our clock's time_ns (steady_now_ns) on the autopilot's clock, once measured: for a
   // consumer that needs a message stamped in the autopilot's time.
   std::optional<std::int64_t> to_autopilot_time_ns(std::int64_t time_ns) const;
@@ -78,6 +80,7 @@ class FlightLink {
   void note_changes(std::int64_t now_ns);
   void send_origin(std::int64_t now_ns);  // link.ekf_origin, while sends are due
   void level_local_frame();  // at the first good pair: from the autopilot's latest ATTITUDE
+  void ask_attitude_rate(std::int64_t now_ns);  // MAV_CMD_SET_MESSAGE_INTERVAL, until acknowledged
   double advised_ev_delay_ms(const TimesyncEstimate& offset) const;
 
   LinkConfig config_;
@@ -105,6 +108,8 @@ class FlightLink {
     std::int64_t heard_ns = 0;  // 0: none heard
   } attitude_;  // the followed autopilot's latest ATTITUDE
   std::uint64_t answered_ = 0, requests_sent_ = 0;
+  std::optional<std::uint8_t> interval_result_;  // the autopilot's COMMAND_ACK to our interval request
+  AutopilotGyro gyro_;
 
   // The receiver thread's own.
   mavlink::FrameParser parser_;
@@ -118,6 +123,9 @@ class FlightLink {
   AutopilotState reported_;
   bool reported_offset_ = false, warned_round_trip_ = false;
   int origin_sends_left_ = 0;
+  int interval_requests_left_ = 0;  // MAV_CMD_SET_MESSAGE_INTERVAL tries left for this autopilot
+  std::int64_t next_interval_request_ns_ = 0;
+  bool interval_reported_ = false;
   std::int64_t next_origin_ns_ = 0;
   std::atomic<std::uint64_t> origins_sent_{0};  // read by status_line() from any thread
   std::vector<std::string> news_;

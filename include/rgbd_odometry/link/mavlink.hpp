@@ -3,7 +3,8 @@
 // carries no generated MAVLink library. The messages it needs only: HEARTBEAT
 // (common.xml/minimal.xml), TIMESYNC, ODOMETRY, SET_GPS_GLOBAL_ORIGIN, SET_HOME_POSITION
 // (common.xml) and VISION_POSITION_DELTA (ardupilotmega.xml). Received frames are split and
-// checked by mavlink_parser.hpp; HEARTBEAT, TIMESYNC and ATTITUDE are also read here.
+// checked by mavlink_parser.hpp; HEARTBEAT, TIMESYNC, ATTITUDE and COMMAND_ACK are also read
+// here. COMMAND_LONG carries our one command: MAV_CMD_SET_MESSAGE_INTERVAL.
 //
 // Frame (MAVLink 2, unsigned):
 //   0xFD | len | incompat_flags=0 | compat_flags=0 | seq | sysid | compid | msgid (3 B, LE)
@@ -209,6 +210,39 @@ struct Attitude {  // #30, common.xml: received only, to level the local frame a
 };
 static_assert(Attitude::kYawspeedOffset + 4 == Attitude::kPayloadBytes);
 
+inline constexpr std::uint16_t kMavCmdSetMessageInterval = 511;  // MAV_CMD
+inline constexpr std::uint8_t kMavResultAccepted = 0;             // MAV_RESULT
+
+struct CommandLong {  // #76, common.xml: sent to ask for the autopilot's ATTITUDE at our rate
+  static constexpr std::uint32_t kId = 76;
+  static constexpr std::uint8_t kCrcExtra = 152;
+  static constexpr std::size_t kPayloadBytes = 33;
+
+  std::array<float, 7> param{0, 0, 0, 0, 0, 0, 0};  // param1 .. param7
+  std::uint16_t command = 0;                         // MAV_CMD
+  std::uint8_t target_system = 0, target_component = 0;
+  std::uint8_t confirmation = 0;  // 0 the first time, +1 for each repeat
+
+  static constexpr std::size_t kParamOffset = 0, kCommandOffset = 28, kTargetSystemOffset = 30,
+                               kTargetComponentOffset = 31, kConfirmationOffset = 32;
+};
+static_assert(CommandLong::kConfirmationOffset + 1 == CommandLong::kPayloadBytes);
+
+struct CommandAck {  // #77, common.xml: received, the autopilot's verdict on a command of ours
+  static constexpr std::uint32_t kId = 77;
+  static constexpr std::uint8_t kCrcExtra = 143;
+  static constexpr std::size_t kPayloadBytes = 10;  // with the extensions
+
+  std::uint16_t command = 0;
+  std::uint8_t result = 0;  // MAV_RESULT
+  // Extensions: progress, result_param2, and whom the answer is for.
+  std::uint8_t target_system = 0, target_component = 0;
+
+  static constexpr std::size_t kCommandOffset = 0, kResultOffset = 2, kProgressOffset = 3, kResultParam2Offset = 4,
+                               kTargetSystemOffset = 8, kTargetComponentOffset = 9;
+};
+static_assert(CommandAck::kTargetComponentOffset + 1 == CommandAck::kPayloadBytes);
+
 // ---- payloads: the full, untrimmed wire image of one message ---------------------------
 void pack_payload(const Heartbeat& m, std::span<std::uint8_t, Heartbeat::kPayloadBytes> out);
 void pack_payload(const Timesync& m, std::span<std::uint8_t, Timesync::kPayloadBytes> out);
@@ -217,12 +251,15 @@ void pack_payload(const VisionPositionDelta& m, std::span<std::uint8_t, VisionPo
 void pack_payload(const SetGpsGlobalOrigin& m, std::span<std::uint8_t, SetGpsGlobalOrigin::kPayloadBytes> out);
 void pack_payload(const SetHomePosition& m, std::span<std::uint8_t, SetHomePosition::kPayloadBytes> out);
 void pack_payload(const Attitude& m, std::span<std::uint8_t, Attitude::kPayloadBytes> out);  // tests send it
+void pack_payload(const CommandLong& m, std::span<std::uint8_t, CommandLong::kPayloadBytes> out);
+void pack_payload(const CommandAck& m, std::span<std::uint8_t, CommandAck::kPayloadBytes> out);  // tests send it
 
 // The received messages, from a payload already zero-extended to at least the message's full
 // length (mavlink_parser.hpp hands out kMaxPayloadBytes).
 [[nodiscard]] Heartbeat unpack_heartbeat(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
 [[nodiscard]] Timesync unpack_timesync(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
 [[nodiscard]] Attitude unpack_attitude(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
+[[nodiscard]] CommandAck unpack_command_ack(std::span<const std::uint8_t, kMaxPayloadBytes> payload);
 
 // ---- checksum ---------------------------------------------------------------------------
 inline constexpr std::uint16_t kCrcInit = 0xFFFF;
@@ -253,6 +290,8 @@ class Framer {
   [[nodiscard]] std::size_t encode(const SetGpsGlobalOrigin& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const SetHomePosition& m, FrameSpan out);
   [[nodiscard]] std::size_t encode(const Attitude& m, FrameSpan out);  // tests send it
+  [[nodiscard]] std::size_t encode(const CommandLong& m, FrameSpan out);
+  [[nodiscard]] std::size_t encode(const CommandAck& m, FrameSpan out);  // tests send it
 
   // The framing alone, for a payload of `payload_bytes` already written at out[kHeaderBytes]:
   // trims its trailing zeros, writes header and checksum, returns the frame length.

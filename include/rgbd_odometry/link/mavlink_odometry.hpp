@@ -58,24 +58,12 @@
 #include <cstdint>
 #include <optional>
 
+#include "rgbd_odometry/core/camera_mount.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/link/mavlink.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
 
 namespace rgbdo {
-
-struct CameraExtrinsic {
-  Eigen::Matrix3d R_body_camera = forward_looking_rotation();  // camera axes in body axes
-  Eigen::Vector3d p_body_camera_m = Eigen::Vector3d::Zero();    // camera position in body frame
-
-  static Eigen::Matrix3d forward_looking_rotation() {
-    Eigen::Matrix3d R;
-    R << 0, 0, 1,  //
-        1, 0, 0,   //
-        0, 1, 0;
-    return R;
-  }
-};
 
 struct MavlinkOdometryConfig {
   CameraExtrinsic extrinsic;
@@ -102,8 +90,6 @@ struct BodyMotion {
 // d xi_b / d xi_c at the given motion, for dT_b = X dT_c X^-1.
 Matrix6d camera_to_body_jacobian(const CameraExtrinsic& X, const Eigen::Isometry3d& T_body_prev_curr);
 BodyMotion body_motion(const PairResult& pair, const CameraExtrinsic& X);
-// (roll, pitch, yaw) of R = Rz(yaw) Ry(pitch) Rx(roll).
-Eigen::Vector3d euler_zyx(const Eigen::Matrix3d& R);
 // d (roll, pitch, yaw) / d dth for the left perturbation exp(dth) R.
 Eigen::Matrix3d euler_zyx_jacobian_left(const Eigen::Matrix3d& R);
 // Covariance of (v, w) = (dR^T t / dt, r / dt) from that of xi = (t, r).

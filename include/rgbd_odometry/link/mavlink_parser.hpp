@@ -1,14 +1,18 @@
 #pragma once
 // Received MAVLink: splits a byte stream (a serial line, the datagrams of a UDP socket) into
 // checked frames. MAVLink 2 (0xFD) and MAVLink 1 (0xFE) framing; the checksum with CRC_EXTRA
-// is verified for the messages this program understands (HEARTBEAT, TIMESYNC, ATTITUDE:
-// mavlink.hpp);
-// a frame of any other id cannot be checked and is skipped by its length field.
+// is verified for the messages this program understands (HEARTBEAT, TIMESYNC, ATTITUDE,
+// COMMAND_ACK: mavlink.hpp). Only those are delivered.
 //
-// Resynchronisation: a frame that fails its checksum (or has incompat flags this parser does
-// not know) is not skipped by its length, which may be garbage: the search for the next start
-// byte restarts at the byte after the bad frame's start byte, so a good frame that began
-// inside the bad one's bytes (a truncated frame followed by a whole one) is still found.
+// Resynchronisation: no length field is trusted before the frame's checksum holds. A start
+// byte that cannot begin a frame we can check (an id we have no CRC_EXTRA for, a length its
+// message cannot have, incompat flags we do not know) is passed over on its header alone, and
+// a frame that fails its checksum is passed over too: either way the search for the next start
+// byte restarts at the byte after it. A false start byte in noise therefore never swallows the
+// good frame that follows it (skipped by a random length field, it used to), and a good frame
+// that began inside a bad one's bytes (a truncated frame followed by a whole one) is found. The
+// price: the bytes of a genuine frame of another message are scanned for start bytes too, and
+// counted as passed over, not skipped whole.
 //
 // Bounded: the bytes of one unfinished frame at most are kept (a fixed buffer, nothing is
 // allocated, ever), any byte sequence at any rate only advances counters. Signed MAVLink 2
@@ -40,18 +44,24 @@ struct ReceivedFrame {
   std::span<const std::uint8_t, kMaxPayloadBytes> payload{kNoPayload};
 };
 
-// Counters since the parser was made. Every byte fed ends up in a delivered frame, a frame
-// skipped by length (unknown id), a rejected frame's start byte, bytes_discarded, or (for
-// now) the unfinished frame.
+// Counters since the parser was made. Every byte fed ends up in a delivered frame,
+// bytes_discarded, or (for now) the unfinished frame.
 struct ParserCounts {
   std::uint64_t frames_ok = 0;         // checksum verified, delivered
-  std::uint64_t crc_errors = 0;        // known id, wrong checksum
-  std::uint64_t unknown_ids = 0;       // skipped by length: no CRC_EXTRA known for the id
+  std::uint64_t crc_errors = 0;        // known id, wrong checksum or a length its message cannot have
+  std::uint64_t unknown_ids = 0;       // start bytes passed over: no CRC_EXTRA known for the id
   std::uint64_t unsupported_flags = 0; // MAVLink 2 incompat flags other than "signed"
   std::uint64_t signed_frames = 0;     // of frames_ok
-  std::uint64_t bytes_discarded = 0;   // between frames, start bytes of rejected frames, reset()
+  std::uint64_t bytes_discarded = 0;   // not in a delivered frame: noise, passed-over frames, reset()
 };
 
+// What the parser checks a message by: its CRC_EXTRA and its longest payload (MAVLink 2
+// trims trailing zeros, so a payload may be shorter, never longer).
+struct CheckedMessage {
+  std::uint8_t crc_extra = 0;
+  std::size_t max_payload_bytes = 0;
+};
+[[nodiscard]] std::optional<CheckedMessage> checked_message(std::uint32_t msgid);
 // CRC_EXTRA of the message ids this program reads, or nothing.
 [[nodiscard]] std::optional<std::uint8_t> crc_extra_of(std::uint32_t msgid);
 
@@ -69,8 +79,22 @@ class FrameParser {
     }
   }
 
-  // Forget an unfinished frame (its bytes are counted as discarded). For datagram transports:
-  // a UDP datagram holds whole frames, so a frame is never continued by the next datagram.
+  // The end of a UDP datagram, which holds whole frames: a frame is never continued by the
+  // next datagram. What looked like the start of an unfinished frame was a false start: its
+  // start byte is passed over and the rest searched again, so a good frame inside it is still
+  // delivered; what is left after that is counted as discarded.
+  template <typename OnFrame>
+  void end_datagram(OnFrame&& on_frame) {
+    while (scan_ < size_) {
+      ++counts_.bytes_discarded;
+      ++scan_;
+      ReceivedFrame frame;
+      while (next_frame(frame)) on_frame(static_cast<const ReceivedFrame&>(frame));
+    }
+    size_ = scan_ = 0;
+  }
+
+  // Forget an unfinished frame (its bytes are counted as discarded).
   void reset();
 
   const ParserCounts& counts() const { return counts_; }

@@ -35,6 +35,13 @@ class PairEstimator {
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
   static bool dropped_frame(const PairResult& r) { return r.status == Status::StampNotIncreasing; }
 
+  // The colour stream's latency behind its stamps, where it is measured against the autopilot's
+  // gyro (pipeline/capture_latency.hpp): its standard error replaces
+  // covariance.colour_latency_sigma_s in the pairs' latency terms; nullopt: that prior.
+  void set_colour_latency_sigma(std::optional<double> measured_s) {
+    latency_.colour_s = measured_s.value_or(config_.covariance.colour_latency_sigma_s);
+  }
+
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
   void forget_motion() {
     last_pair_.reset();

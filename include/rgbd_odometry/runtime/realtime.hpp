@@ -17,6 +17,7 @@
 #include <string>
 
 #include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/gyro.hpp"
 #include "rgbd_odometry/sensor/frame_feed.hpp"
 #include "rgbd_odometry/runtime/latency.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
@@ -54,8 +55,11 @@ class RealtimePipeline {
   using OutputFn = std::function<void(const PairOutput&)>;
   using MessageFn = std::function<void(const std::string&)>;
   // on_output gets every frame's result, in capture order; on_message the run's news (sensor
-  // lost / back, periodic status). Both are called on the output thread only.
-  RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message);
+  // lost / back, periodic status). Both are called on the output thread only. gyro: the
+  // autopilot's rates (live) or the recording's imu.txt, against which the frames' capture
+  // latency is measured and applied (pipeline/capture_latency.hpp); null: the stamps stand.
+  RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message,
+                   GyroFeed* gyro = nullptr);
   // Called on the output thread at least every 50 ms, frames or not (heartbeats, link news).
   void set_tick(std::function<void()> on_tick) { on_tick_ = std::move(on_tick); }
 
@@ -67,6 +71,7 @@ class RealtimePipeline {
  private:
   Config config_;
   FrameFeed& feed_;
+  GyroFeed* gyro_;
   OutputFn on_output_;
   MessageFn on_message_;
   std::function<void()> on_tick_;

@@ -1,0 +1,147 @@
+#pragma once
+// When the frames were taken, learnt from the autopilot's gyro.
+//
+// A sensor stamps a frame some time after it exposed it (fr1's Kinect: 15-17 ms), and no image
+// shows how long. The autopilot's gyro does: the camera's rotation between two frames, turned
+// into the body frame by the configured mount, equals the gyro's rate integrated over the
+// interval the frames were really taken in. For each candidate latency d on a grid
+// (latency.min_s .. max_s, 1 ms apart) every pair k gives the residual
+//     r_k(d) = R_body_camera theta_k - integral of the gyro over [t_prev - d, t_curr - d]
+//            = -b dt_k + noise        (b: the gyro's bias, constant per axis)
+// every pair weighing the same (solve() says why). The cost J(d) = sum_k |r_k|^2 with b
+// solved in closed form per d is kept as running sums (allocated once), so each pair costs a
+// fixed amount of work. The latency is J's minimum (refined between grid points by a
+// parabola); its standard error is sqrt(2 s^2 / J''), s^2 the residuals' own scatter. Only a change of rate across a pair
+// says anything about d (dr/dd is that change): a camera at rest adds nothing, and forgets
+// nothing either, so the estimate holds while the vehicle waits; a moving camera's older pairs
+// fade over latency.memory_s, so a slowly changing latency is followed.
+//
+// The gyro changes the time, never the motion: the autopilot's filter has its gyro already,
+// and a motion fused with it would carry errors twice.
+//
+// The same pairs measure the camera's mount: the rotation that carries the camera's rates onto
+// the gyro's (with the bias as offset) is an absolute-orientation fit (core/umeyama.hpp) at the
+// estimated latency, over the last pairs that turned the camera.
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/gyro.hpp"
+#include "rgbd_odometry/core/pair_result.hpp"
+
+namespace rgbdo {
+
+struct LatencyEstimate {
+  bool known = false;     // a minimum inside the searched range, with a finite standard error
+  double latency_s = 0;   // stamp minus capture instant, on the gyro's clock
+  double sigma_s = 0;     // its standard error
+  // How far the rotation axes' own latencies lie from it (rms, weighed by their information,
+  // less their noise): one latency applied to a sensor whose streams enter the axes
+  // differently leaves that much.
+  double axis_spread_s = 0;
+  double scatter = 0;     // the fit's reduced chi-square (1: the pairs scatter as their covariance says)
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  // rad/s, body, at that latency
+  std::uint64_t pairs = 0;     // pairs the estimate has seen
+  std::uint64_t rejected = 0;  // pairs too far from it to be believed (a failed fit), left out
+  std::uint64_t uncovered = 0; // pairs the gyro samples did not cover (a gap, before the first)
+};
+
+// The camera's mount as the gyro sees it, in body.*'s terms.
+struct MountEstimate {
+  bool known = false;  // enough rotation about two axes at least
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;
+  int pairs = 0;
+};
+
+class CaptureLatencyEstimator {
+ public:
+  CaptureLatencyEstimator(const LatencyConfig& config, const Eigen::Matrix3d& R_body_camera);
+
+  // Gyro samples in time order (older or equal stamps than the newest held are dropped).
+  void add_gyro(std::span<const GyroSample> samples);
+  // A solved pair on the stamps' timeline (its colour stamps), its rotation vector (camera
+  // frame) and that rotation's covariance. Held until the gyro covers every offset searched.
+  void add_pair(std::int64_t t_prev_ns, std::int64_t t_curr_ns, const Eigen::Vector3d& rotation,
+                const Eigen::Matrix3d& rotation_covariance);
+  // The gyro samples a pair stamped t_curr_ns needs, up to this time.
+  std::int64_t gyro_needed_until_ns(std::int64_t t_curr_ns) const;
+
+  const LatencyEstimate& estimate() const { return estimate_; }
+  // Fitted now, from the pairs held (buffers sized once).
+  MountEstimate mount();
+
+ private:
+  struct Pair {
+    std::int64_t t_prev_ns = 0, t_curr_ns = 0;
+    Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // camera frame
+    bool turning = false;  // clear of its own noise
+  };
+  struct Gyro {
+    std::int64_t t_ns = 0;
+    Eigen::Vector3d rate = Eigen::Vector3d::Zero();
+    Eigen::Vector3d integral = Eigen::Vector3d::Zero();  // since the first sample held
+  };
+  // The gyro's integral from its first held sample to t; nullopt outside the samples held or
+  // across a gap longer than kMaxGyroGapNs.
+  std::optional<Eigen::Vector3d> integral_at(std::int64_t t_ns) const;
+  std::optional<Eigen::Vector3d> integral_over(std::int64_t from_ns, std::int64_t to_ns) const;
+  const Gyro& gyro(std::size_t i) const { return gyro_[(gyro_first_ + i) % gyro_.size()]; }
+  void process(const Pair& p);
+  void solve();
+
+  LatencyConfig config_;
+  Eigen::Matrix3d R_body_camera_;
+  int offsets_ = 0;  // grid points, 1 ms apart from config_.min_s
+  // Running sums per grid offset and body axis (weights w, intervals dt, residuals r at b = 0):
+  // sum w dt^2 (the same for every offset), sum w dt r, sum w r^2.
+  Eigen::Vector3d sum_tt_ = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> sum_tr_, sum_rr_;
+  double weight_sum_ = 0;  // pairs, faded as the sums are
+  std::vector<Gyro> gyro_;  // ring
+  std::size_t gyro_first_ = 0, gyro_count_ = 0;
+  std::vector<Pair> waiting_;  // ring: pairs the gyro does not cover yet
+  std::size_t waiting_first_ = 0, waiting_count_ = 0;
+  std::vector<Pair> recent_;  // ring: the last pairs that turned the camera, for the mount
+  std::size_t recent_next_ = 0, recent_count_ = 0;
+  std::vector<Eigen::Vector3d> residual_;  // one pair's, per offset
+  std::vector<Eigen::Vector3d> mount_camera_, mount_body_;  // the mount fit's rates
+  LatencyEstimate estimate_;
+};
+
+// The latency applied: each pair stamped at its frames' capture instants. Lives on the
+// estimation thread, next to the PairEstimator whose covariance it informs.
+class CaptureClock {
+ public:
+  // feed: the gyro's samples (live: the autopilot's; a replay: imu.txt), null for none.
+  CaptureClock(const Config& config, GyroFeed* feed);
+
+  // The colour latency's standard error the covariance should carry instead of
+  // covariance.colour_latency_sigma_s; nullopt while the latency is not measured.
+  std::optional<double> colour_latency_sigma_s() const;
+  // Learns from a finished pair (stamps as the sensor gave them) and restamps it at the
+  // capture instants: t_prev at the instant its frame was given as that pair's current frame,
+  // t_curr at the latency applied now. Fills r.timing.
+  void stamp(PairResult& r);
+  // A gap in the frames: the next pair's previous frame was not stamped here.
+  void forget() { last_curr_stamp_ns_.reset(); }
+
+  bool active() const { return feed_ != nullptr; }
+  const LatencyEstimate& estimate() const { return estimator_.estimate(); }
+
+ private:
+  LatencyConfig config_;
+  GyroFeed* feed_;
+  CaptureLatencyEstimator estimator_;
+  std::vector<GyroSample> taken_;  // one take()'s buffer, sized once
+  double applied_s_ = 0;
+  CaptureTiming timing_;  // as of the last pair, its mount refreshed every kMountEveryPairs
+  int pairs_since_mount_ = 0;
+  std::optional<std::int64_t> last_curr_stamp_ns_;  // the last pair's t_curr as the sensor stamped it
+  std::int64_t last_curr_shift_ns_ = 0;             // and the latency it was given
+};
+
+}  // namespace rgbdo

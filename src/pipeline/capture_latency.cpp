@@ -1,0 +1,359 @@
+#include "rgbd_odometry/pipeline/capture_latency.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rgbd_odometry/core/camera_mount.hpp"
+#include "rgbd_odometry/core/geometry.hpp"
+#include "rgbd_odometry/core/umeyama.hpp"
+
+namespace rgbdo {
+namespace {
+
+constexpr std::int64_t kStepNs = 1'000'000;  // the offsets' grid
+// Gyro samples held: 160 s at 50 Hz, 40 s at 200 Hz; more than the span the waiting pairs
+// and the mount's pairs need.
+constexpr std::size_t kGyroSamples = 8192;
+constexpr std::size_t kWaitingPairs = 512;  // ~17 s at 30 Hz of pairs waiting for a late gyro
+constexpr std::size_t kMountPairs = 600;    // the mount is fitted over the last pairs that turned
+// Two gyro samples further apart than this are a gap: no integral across it.
+constexpr std::int64_t kMaxGyroGapNs = 100'000'000;
+// The bias is solved per offset with this prior, rad/s: far wider than any MEMS gyro's, it only
+// keeps the solve defined before the pairs span enough time.
+constexpr double kBiasPriorSigma = 0.2;
+// The curvature of the cost is read this many grid steps either side of its minimum: wide
+// enough that the noise of the sums does not dominate it, narrow enough to stay in the valley.
+constexpr int kCurvatureSteps = 3;
+// A pair whose residual at the known latency is beyond chi-square(3) 99.9 % is a failed fit's.
+constexpr double kChi2_3_999 = 16.27;
+// A pair turned the camera (and so fades the older evidence) when its rotation is this many
+// sigma from none.
+constexpr double kTurningChi2 = 9.0;
+// A pair's rotation noise before the residuals show it, rad^2 per axis (0.1 degree).
+constexpr double kInitialNoise = 3e-6;
+constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr int kMountEveryPairs = 30;
+
+std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
+
+}  // namespace
+
+CaptureLatencyEstimator::CaptureLatencyEstimator(const LatencyConfig& config, const Eigen::Matrix3d& R_body_camera)
+    : config_(config),
+      R_body_camera_(R_body_camera),
+      offsets_(1 + static_cast<int>((seconds_to_ns(config.max_s) - seconds_to_ns(config.min_s)) / kStepNs)),
+      sum_tr_(static_cast<std::size_t>(offsets_), Eigen::Vector3d::Zero()),
+      sum_rr_(static_cast<std::size_t>(offsets_), Eigen::Vector3d::Zero()),
+      gyro_(kGyroSamples),
+      waiting_(kWaitingPairs),
+      recent_(kMountPairs),
+      residual_(static_cast<std::size_t>(offsets_)) {
+  mount_camera_.reserve(kMountPairs);
+  mount_body_.reserve(kMountPairs);
+}
+
+void CaptureLatencyEstimator::add_gyro(std::span<const GyroSample> samples) {
+  for (const GyroSample& s : samples) {
+    if (!s.rate.allFinite()) continue;
+    Gyro g{s.t_ns, s.rate, Eigen::Vector3d::Zero()};
+    if (gyro_count_ > 0) {
+      const Gyro& last = gyro(gyro_count_ - 1);
+      if (s.t_ns <= last.t_ns) continue;
+      // Across a gap the integral restarts its count (integral_at refuses to bridge it).
+      const double h = static_cast<double>(s.t_ns - last.t_ns) * 1e-9;
+      g.integral = last.integral;
+      if (s.t_ns - last.t_ns <= kMaxGyroGapNs) g.integral += 0.5 * h * (last.rate + s.rate);
+    }
+    if (gyro_count_ == gyro_.size()) {
+      gyro_first_ = (gyro_first_ + 1) % gyro_.size();
+      --gyro_count_;
+    }
+    gyro_[(gyro_first_ + gyro_count_) % gyro_.size()] = g;
+    ++gyro_count_;
+  }
+  // The waiting pairs the gyro now covers at every offset searched, in order.
+  while (waiting_count_ > 0) {
+    const Pair& p = waiting_[waiting_first_];
+    if (gyro_count_ == 0 || gyro(gyro_count_ - 1).t_ns < gyro_needed_until_ns(p.t_curr_ns)) break;
+    process(p);
+    waiting_first_ = (waiting_first_ + 1) % waiting_.size();
+    --waiting_count_;
+  }
+}
+
+std::int64_t CaptureLatencyEstimator::gyro_needed_until_ns(std::int64_t t_curr_ns) const {
+  return t_curr_ns - seconds_to_ns(config_.min_s);
+}
+
+void CaptureLatencyEstimator::add_pair(std::int64_t t_prev_ns, std::int64_t t_curr_ns, const Eigen::Vector3d& rotation,
+                                       const Eigen::Matrix3d& rotation_covariance) {
+  if (t_curr_ns <= t_prev_ns || !rotation.allFinite() || !rotation_covariance.allFinite()) return;
+  // The camera turned (and so fades the older evidence) when its rotation stands clear of its
+  // own noise; at rest it says nothing of the latency.
+  const bool turning = rotation.dot(rotation) > kTurningChi2 * rotation_covariance.trace();
+  Pair p{t_prev_ns, t_curr_ns, rotation, turning};
+  if (waiting_count_ == waiting_.size()) {  // no gyro for a long time: the oldest goes unmeasured
+    waiting_first_ = (waiting_first_ + 1) % waiting_.size();
+    --waiting_count_;
+    ++estimate_.uncovered;
+  }
+  waiting_[(waiting_first_ + waiting_count_) % waiting_.size()] = p;
+  ++waiting_count_;
+  add_gyro({});  // it may be covered already (a replay's gyro is read ahead)
+}
+
+std::optional<Eigen::Vector3d> CaptureLatencyEstimator::integral_at(std::int64_t t_ns) const {
+  if (gyro_count_ < 2 || t_ns < gyro(0).t_ns || t_ns > gyro(gyro_count_ - 1).t_ns) return std::nullopt;
+  // The last sample at or before t.
+  std::size_t lo = 0, hi = gyro_count_ - 1;
+  while (hi - lo > 1) {
+    const std::size_t mid = (lo + hi) / 2;
+    (gyro(mid).t_ns <= t_ns ? lo : hi) = mid;
+  }
+  const Gyro& a = gyro(lo);
+  const Gyro& b = gyro(hi);
+  if (b.t_ns - a.t_ns > kMaxGyroGapNs) return std::nullopt;
+  // The rate linear between the samples: its integral is quadratic in time.
+  const double h = static_cast<double>(b.t_ns - a.t_ns) * 1e-9;
+  const double u = static_cast<double>(t_ns - a.t_ns) * 1e-9;
+  return a.integral + u * a.rate + (u * u / (2 * h)) * (b.rate - a.rate);
+}
+
+std::optional<Eigen::Vector3d> CaptureLatencyEstimator::integral_over(std::int64_t from_ns, std::int64_t to_ns) const {
+  const auto a = integral_at(from_ns);
+  const auto b = integral_at(to_ns);
+  if (!a || !b) return std::nullopt;
+  // A gap between them restarted the running integral: the difference would not be the rate's.
+  for (std::size_t i = gyro_count_ - 1; i > 0 && gyro(i).t_ns > from_ns; --i)
+    if (gyro(i).t_ns - gyro(i - 1).t_ns > kMaxGyroGapNs) return std::nullopt;
+  return *b - *a;
+}
+
+void CaptureLatencyEstimator::process(const Pair& p) {
+  ++estimate_.pairs;
+  const Eigen::Vector3d theta = R_body_camera_ * p.rotation;
+  const double dt = static_cast<double>(p.t_curr_ns - p.t_prev_ns) * 1e-9;
+  const std::int64_t min_ns = seconds_to_ns(config_.min_s);
+  // The residual at each offset, at b = 0; all or none (a gap anywhere leaves the pair out).
+  std::vector<Eigen::Vector3d>& residual = residual_;
+  for (int k = 0; k < offsets_; ++k) {
+    const std::int64_t d = min_ns + k * kStepNs;
+    const auto swept = integral_over(p.t_prev_ns - d, p.t_curr_ns - d);
+    if (!swept) {
+      ++estimate_.uncovered;
+      return;
+    }
+    residual[static_cast<std::size_t>(k)] = theta - *swept;
+  }
+  if (estimate_.known) {
+    // A failed fit's rotation says nothing of the latency: judged at the current estimate
+    // against the pairs' own scatter about it.
+    const double at = (estimate_.latency_s - config_.min_s) / (kStepNs * 1e-9);
+    const int k = std::clamp(static_cast<int>(std::lround(at)), 0, offsets_ - 1);
+    const Eigen::Vector3d r = residual[static_cast<std::size_t>(k)] + estimate_.gyro_bias * dt;
+    if (r.squaredNorm() > kChi2_3_999 * estimate_.scatter) {
+      ++estimate_.rejected;
+      return;
+    }
+  }
+  if (p.turning) {
+    const double keep = std::exp(-dt / config_.memory_s);
+    sum_tt_ *= keep;
+    weight_sum_ *= keep;
+    for (int k = 0; k < offsets_; ++k) {
+      sum_tr_[static_cast<std::size_t>(k)] *= keep;
+      sum_rr_[static_cast<std::size_t>(k)] *= keep;
+    }
+    recent_[recent_next_] = p;
+    recent_next_ = (recent_next_ + 1) % recent_.size();
+    recent_count_ = std::min(recent_count_ + 1, recent_.size());
+  }
+  sum_tt_.array() += dt * dt;
+  weight_sum_ += 1;
+  for (int k = 0; k < offsets_; ++k) {
+    const Eigen::Vector3d& r = residual[static_cast<std::size_t>(k)];
+    sum_tr_[static_cast<std::size_t>(k)] += dt * r;
+    sum_rr_[static_cast<std::size_t>(k)] += r.cwiseProduct(r);
+  }
+  solve();
+}
+
+namespace {
+
+// A cost's minimum on the grid, refined by a parabola through its neighbours kCurvatureSteps
+// either side: grid index, offset from it (s), curvature (1/s^2). Nullopt at the grid's edge or
+// where the cost does not bend up.
+struct Minimum {
+  int index = 0;
+  double vertex_s = 0, cost = 0, curvature = 0;
+};
+template <typename Cost>
+std::optional<Minimum> minimum_of(int offsets, double step_s, Cost&& cost) {
+  Minimum m;
+  m.cost = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < offsets; ++k) {
+    const double c = cost(k);
+    if (c < m.cost) {
+      m.cost = c;
+      m.index = k;
+    }
+  }
+  if (m.index < kCurvatureSteps || m.index >= offsets - kCurvatureSteps) return std::nullopt;
+  const double h = kCurvatureSteps * step_s;
+  const double before = cost(m.index - kCurvatureSteps), after = cost(m.index + kCurvatureSteps);
+  const double bend = before - 2 * m.cost + after;
+  if (!(bend > 0)) return std::nullopt;
+  m.curvature = bend / (h * h);
+  m.vertex_s = std::clamp(0.5 * h * (before - after) / bend, -h, h);
+  return m;
+}
+
+}  // namespace
+
+void CaptureLatencyEstimator::solve() {
+  // The bias prior in the residuals' units: a pair's noise (the scatter, once known) over the
+  // prior's variance.
+  const double noise = estimate_.scatter > 0 ? estimate_.scatter : kInitialNoise;
+  const Eigen::Vector3d tt = sum_tt_.array() + noise / (kBiasPriorSigma * kBiasPriorSigma);
+  const auto axis_cost = [&](int k, int a) {
+    const double tr = sum_tr_[static_cast<std::size_t>(k)](a);
+    return sum_rr_[static_cast<std::size_t>(k)](a) - tr * tr / tt(a);
+  };
+  const double step_s = kStepNs * 1e-9;
+  const auto best = minimum_of(offsets_, step_s, [&](int k) { return axis_cost(k, 0) + axis_cost(k, 1) + axis_cost(k, 2); });
+  const double dof = 3 * weight_sum_ - 4;  // three axes a pair; the latency and three biases
+  estimate_.known = best.has_value() && dof >= 3;  // else at the edge of the range searched, or too few pairs yet
+  if (!estimate_.known) return;
+  // Every pair weighs the same: the pairs' own covariances carry the latency terms this
+  // measures, whose weights would favour the pairs that say least about it (measured: 3 ms off
+  // on rendered frames, against 0.5 unweighted). The noise is the residuals' own scatter.
+  estimate_.scatter = std::max(0.0, best->cost) / dof;
+  const double inflation = estimate_.scatter;
+  estimate_.latency_s = config_.min_s + best->index * step_s + best->vertex_s;
+  estimate_.sigma_s = std::sqrt(2.0 / best->curvature * inflation);
+  // The bias at the minimum: r = -b dt, so b = -sum w dt r / sum w dt^2.
+  estimate_.gyro_bias = -sum_tr_[static_cast<std::size_t>(best->index)].cwiseQuotient(tt);
+  // Each axis's own latency: a sensor whose streams enter the axes differently (a Kinect's
+  // lagging depth leaks into the tilt rotations, not into the roll about the optical axis) is
+  // no one latency, and the spread of the axes' about the common one is error that applying it
+  // leaves. Weighed by each axis's information, less what their own noise explains.
+  double spread = 0, axis_noise = 0, information = 0;
+  for (int a = 0; a < 3; ++a) {
+    const auto axis = minimum_of(offsets_, step_s, [&](int k) { return axis_cost(k, a); });
+    if (!axis) continue;
+    const double d = config_.min_s + axis->index * step_s + axis->vertex_s - estimate_.latency_s;
+    const double variance = 2.0 / axis->curvature * inflation;
+    spread += axis->curvature * d * d;
+    axis_noise += axis->curvature * variance;
+    information += axis->curvature;
+  }
+  estimate_.axis_spread_s = information > 0 ? std::sqrt(std::max(0.0, spread - axis_noise) / information) : 0;
+}
+
+MountEstimate CaptureLatencyEstimator::mount() {
+  MountEstimate m;
+  if (!estimate_.known || recent_count_ < 10) return m;
+  const std::int64_t d = seconds_to_ns(estimate_.latency_s);
+  std::vector<Eigen::Vector3d>& camera = mount_camera_;
+  std::vector<Eigen::Vector3d>& body = mount_body_;
+  camera.clear();
+  body.clear();
+  for (std::size_t i = 0; i < recent_count_; ++i) {
+    const Pair& p = recent_[i];
+    const auto swept = integral_over(p.t_prev_ns - d, p.t_curr_ns - d);
+    if (!swept) continue;
+    const double dt = static_cast<double>(p.t_curr_ns - p.t_prev_ns) * 1e-9;
+    camera.push_back(p.rotation / dt);  // rates: the bias is then the fit's offset
+    body.push_back(*swept / dt);
+  }
+  if (camera.size() < 10) return m;
+  // The camera must have turned about two axes at least for the fit to fix a rotation.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& c : camera) mean += c;
+  mean /= static_cast<double>(camera.size());
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+  for (const auto& c : camera) spread += (c - mean) * (c - mean).transpose();
+  spread /= static_cast<double>(camera.size());
+  const Eigen::Vector3d eig = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues();
+  constexpr double kMinRateSpread = 0.03;  // rad/s, standard deviation about the second axis
+  if (!(eig(1) > kMinRateSpread * kMinRateSpread)) return m;
+  Eigen::Isometry3d T;
+  if (!fit_rigid(camera, body, {}, T)) return m;
+  // body.*'s mount M: R_body_camera = M * forward_looking_rotation; Z-Y-X angles of M.
+  const Eigen::Vector3d angles =
+      euler_zyx(T.linear() * CameraExtrinsic::forward_looking_rotation().transpose()) * kRadToDeg;
+  m.roll_deg = angles(0);
+  m.pitch_deg = angles(1);
+  m.yaw_deg = angles(2);
+  m.pairs = static_cast<int>(camera.size());
+  m.known = true;
+  return m;
+}
+
+CaptureClock::CaptureClock(const Config& config, GyroFeed* feed)
+    : config_(config.latency),
+      feed_(config.latency.enabled ? feed : nullptr),
+      estimator_(config.latency, extrinsic_from(config.body).R_body_camera),
+      taken_(256) {
+  timing_.gyro = feed_ != nullptr;
+}
+
+std::optional<double> CaptureClock::colour_latency_sigma_s() const {
+  const LatencyEstimate& e = estimator_.estimate();
+  if (!feed_ || !e.known || e.sigma_s > config_.converged_sigma_s) return std::nullopt;
+  // What applying one latency leaves: its own error, the axes' spread about it and, while the
+  // applied latency is still on its way to the estimate, the gap.
+  return std::sqrt(e.sigma_s * e.sigma_s + e.axis_spread_s * e.axis_spread_s +
+                   (e.latency_s - applied_s_) * (e.latency_s - applied_s_));
+}
+
+void CaptureClock::stamp(PairResult& r) {
+  if (!feed_) return;
+  const std::int64_t stamp_prev = r.t_prev_ns, stamp_curr = r.t_curr_ns;
+  // The gyro up to what this pair needs (a live feed hands over what has arrived).
+  const std::int64_t until = estimator_.gyro_needed_until_ns(stamp_curr) + kMaxGyroGapNs;
+  for (std::size_t n; (n = feed_->take(until, taken_)) > 0;) {
+    estimator_.add_gyro(std::span<const GyroSample>(taken_.data(), n));
+    if (n < taken_.size()) break;
+  }
+  if (r.status == Status::Ok)
+    estimator_.add_pair(stamp_prev, stamp_curr, rotation_vector(r.T_prev_curr.linear()),
+                        r.covariance.bottomRightCorner<3, 3>());
+  const LatencyEstimate& e = estimator_.estimate();
+  // The applied latency follows the estimate once it is known well enough, at most
+  // latency.max_slew seconds per second of frames and never so far that the frames' order changes.
+  const double dt = static_cast<double>(stamp_curr - stamp_prev) * 1e-9;
+  if (e.known && e.sigma_s <= config_.converged_sigma_s && dt > 0) {
+    const double step = std::min(config_.max_slew * dt, 0.25 * dt);
+    applied_s_ += std::clamp(e.latency_s - applied_s_, -step, step);
+  }
+  const std::int64_t shift = seconds_to_ns(applied_s_);
+  const std::int64_t prev_shift = last_curr_stamp_ns_ == stamp_prev ? last_curr_shift_ns_ : shift;
+  r.t_prev_ns = stamp_prev - prev_shift;
+  r.t_curr_ns = stamp_curr - shift;
+  last_curr_stamp_ns_ = stamp_curr;
+  last_curr_shift_ns_ = shift;
+
+  timing_.known = e.known;
+  timing_.latency_s = e.latency_s;
+  timing_.sigma_s = e.sigma_s;
+  timing_.applied_s = applied_s_;
+  timing_.pairs = e.pairs;
+  if (++pairs_since_mount_ >= kMountEveryPairs) {
+    pairs_since_mount_ = 0;
+    const MountEstimate m = estimator_.mount();
+    if (m.known) {
+      timing_.mount_known = true;
+      timing_.mount_roll_deg = m.roll_deg;
+      timing_.mount_pitch_deg = m.pitch_deg;
+      timing_.mount_yaw_deg = m.yaw_deg;
+      timing_.mount_pairs = m.pairs;
+    }
+  }
+  r.timing = timing_;
+}
+
+}  // namespace rgbdo
