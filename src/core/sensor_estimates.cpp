@@ -21,7 +21,8 @@ std::string capture_latency_text(const CaptureTiming& t) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(1);
   if (t.known)
-    s << "capture latency " << t.latency_s * 1e3 << " +- " << t.sigma_s * 1e3 << " ms against the gyro";
+    s << "capture latency " << t.latency_s * 1e3 << " +- " << t.sigma_s * 1e3 << " ms against the gyro, axes "
+      << t.axis_spread_s * 1e3 << " ms apart";
   else
     s << "capture latency not measured yet against the gyro";
   s << " (applied " << t.applied_s * 1e3 << " ms; " << t.pairs << " pairs)";

@@ -29,13 +29,14 @@ constexpr double kBiasPriorSigma = 0.2;
 constexpr int kCurvatureSteps = 3;
 // A pair whose residual at the known latency is beyond chi-square(3) 99.9 % is a failed fit's.
 constexpr double kChi2_3_999 = 16.27;
-// A pair turned the camera (and so fades the older evidence) when its rotation is this many
-// sigma from none.
+// A pair turned the camera when its rotation is this many sigma from none.
 constexpr double kTurningChi2 = 9.0;
-// A pair's rotation noise before the residuals show it, rad^2 per axis (0.1 degree).
+// A pair's rotation noise before the residuals show it, rad^2 per axis (0.1 degree), and the
+// least the outlier gate allows (0.001 degree: a gyro and a camera that agree exactly).
 constexpr double kInitialNoise = 3e-6;
+constexpr double kLeastNoise = 3e-10;
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr int kMountEveryPairs = 30;
+constexpr int kMountEveryPairs = 10;  // the mount fitted again (its cost spread: ~600 integrals)
 
 std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
 
@@ -58,14 +59,18 @@ CaptureLatencyEstimator::CaptureLatencyEstimator(const LatencyConfig& config, co
 void CaptureLatencyEstimator::add_gyro(std::span<const GyroSample> samples) {
   for (const GyroSample& s : samples) {
     if (!s.rate.allFinite()) continue;
-    Gyro g{s.t_ns, s.rate, Eigen::Vector3d::Zero()};
+    Gyro g{s.t_ns, s.rate, Eigen::Vector3d::Zero(), 0};
     if (gyro_count_ > 0) {
       const Gyro& last = gyro(gyro_count_ - 1);
       if (s.t_ns <= last.t_ns) continue;
-      // Across a gap the integral restarts its count (integral_at refuses to bridge it).
+      // Across a gap a new segment starts (integral_over refuses to bridge it).
       const double h = static_cast<double>(s.t_ns - last.t_ns) * 1e-9;
       g.integral = last.integral;
-      if (s.t_ns - last.t_ns <= kMaxGyroGapNs) g.integral += 0.5 * h * (last.rate + s.rate);
+      g.segment = last.segment;
+      if (s.t_ns - last.t_ns <= kMaxGyroGapNs)
+        g.integral += 0.5 * h * (last.rate + s.rate);
+      else
+        ++g.segment;
     }
     if (gyro_count_ == gyro_.size()) {
       gyro_first_ = (gyro_first_ + 1) % gyro_.size();
@@ -88,13 +93,9 @@ std::int64_t CaptureLatencyEstimator::gyro_needed_until_ns(std::int64_t t_curr_n
   return t_curr_ns - seconds_to_ns(config_.min_s);
 }
 
-void CaptureLatencyEstimator::add_pair(std::int64_t t_prev_ns, std::int64_t t_curr_ns, const Eigen::Vector3d& rotation,
-                                       const Eigen::Matrix3d& rotation_covariance) {
-  if (t_curr_ns <= t_prev_ns || !rotation.allFinite() || !rotation_covariance.allFinite()) return;
-  // The camera turned (and so fades the older evidence) when its rotation stands clear of its
-  // own noise; at rest it says nothing of the latency.
-  const bool turning = rotation.dot(rotation) > kTurningChi2 * rotation_covariance.trace();
-  Pair p{t_prev_ns, t_curr_ns, rotation, turning};
+void CaptureLatencyEstimator::add_pair(std::int64_t t_prev_ns, std::int64_t t_curr_ns, const Eigen::Vector3d& rotation) {
+  if (t_curr_ns <= t_prev_ns || !rotation.allFinite()) return;
+  Pair p{t_prev_ns, t_curr_ns, rotation};
   if (waiting_count_ == waiting_.size()) {  // no gyro for a long time: the oldest goes unmeasured
     waiting_first_ = (waiting_first_ + 1) % waiting_.size();
     --waiting_count_;
@@ -105,7 +106,7 @@ void CaptureLatencyEstimator::add_pair(std::int64_t t_prev_ns, std::int64_t t_cu
   add_gyro({});  // it may be covered already (a replay's gyro is read ahead)
 }
 
-std::optional<Eigen::Vector3d> CaptureLatencyEstimator::integral_at(std::int64_t t_ns) const {
+std::optional<CaptureLatencyEstimator::Integral> CaptureLatencyEstimator::integral_at(std::int64_t t_ns) const {
   if (gyro_count_ < 2 || t_ns < gyro(0).t_ns || t_ns > gyro(gyro_count_ - 1).t_ns) return std::nullopt;
   // The last sample at or before t.
   std::size_t lo = 0, hi = gyro_count_ - 1;
@@ -119,17 +120,15 @@ std::optional<Eigen::Vector3d> CaptureLatencyEstimator::integral_at(std::int64_t
   // The rate linear between the samples: its integral is quadratic in time.
   const double h = static_cast<double>(b.t_ns - a.t_ns) * 1e-9;
   const double u = static_cast<double>(t_ns - a.t_ns) * 1e-9;
-  return a.integral + u * a.rate + (u * u / (2 * h)) * (b.rate - a.rate);
+  return Integral{a.integral + u * a.rate + (u * u / (2 * h)) * (b.rate - a.rate), a.segment};
 }
 
 std::optional<Eigen::Vector3d> CaptureLatencyEstimator::integral_over(std::int64_t from_ns, std::int64_t to_ns) const {
   const auto a = integral_at(from_ns);
   const auto b = integral_at(to_ns);
-  if (!a || !b) return std::nullopt;
   // A gap between them restarted the running integral: the difference would not be the rate's.
-  for (std::size_t i = gyro_count_ - 1; i > 0 && gyro(i).t_ns > from_ns; --i)
-    if (gyro(i).t_ns - gyro(i - 1).t_ns > kMaxGyroGapNs) return std::nullopt;
-  return *b - *a;
+  if (!a || !b || a->segment != b->segment) return std::nullopt;
+  return b->value - a->value;
 }
 
 void CaptureLatencyEstimator::process(const Pair& p) {
@@ -154,23 +153,30 @@ void CaptureLatencyEstimator::process(const Pair& p) {
     const double at = (estimate_.latency_s - config_.min_s) / (kStepNs * 1e-9);
     const int k = std::clamp(static_cast<int>(std::lround(at)), 0, offsets_ - 1);
     const Eigen::Vector3d r = residual[static_cast<std::size_t>(k)] + estimate_.gyro_bias * dt;
-    if (r.squaredNorm() > kChi2_3_999 * estimate_.scatter) {
+    if (r.squaredNorm() > kChi2_3_999 * std::max(estimate_.scatter, kLeastNoise)) {
       ++estimate_.rejected;
       return;
     }
   }
-  if (p.turning) {
-    const double keep = std::exp(-dt / config_.memory_s);
-    sum_tt_ *= keep;
-    weight_sum_ *= keep;
-    for (int k = 0; k < offsets_; ++k) {
-      sum_tr_[static_cast<std::size_t>(k)] *= keep;
-      sum_rr_[static_cast<std::size_t>(k)] *= keep;
-    }
-    recent_[recent_next_] = p;
-    recent_next_ = (recent_next_ + 1) % recent_.size();
-    recent_count_ = std::min(recent_count_ + 1, recent_.size());
+  // Only a camera that turned says anything of the latency (and shows the mount): its rotation
+  // stands clear of the pairs' scatter about the gyro. A camera at rest adds nothing (its
+  // residuals at each offset would be the gyro's noise over other samples, moving J's
+  // minimum at random) and fades nothing: the estimate holds while the vehicle waits.
+  const double noise = estimate_.scatter > 0 ? estimate_.scatter : kInitialNoise;
+  if (theta.squaredNorm() <= kTurningChi2 * 3 * noise) {
+    ++estimate_.at_rest;
+    return;
   }
+  const double keep = std::exp(-dt / config_.memory_s);
+  sum_tt_ *= keep;
+  weight_sum_ *= keep;
+  for (int k = 0; k < offsets_; ++k) {
+    sum_tr_[static_cast<std::size_t>(k)] *= keep;
+    sum_rr_[static_cast<std::size_t>(k)] *= keep;
+  }
+  recent_[recent_next_] = p;
+  recent_next_ = (recent_next_ + 1) % recent_.size();
+  recent_count_ = std::min(recent_count_ + 1, recent_.size());
   sum_tt_.array() += dt * dt;
   weight_sum_ += 1;
   for (int k = 0; k < offsets_; ++k) {
@@ -320,16 +326,21 @@ void CaptureClock::stamp(PairResult& r) {
     if (n < taken_.size()) break;
   }
   if (r.status == Status::Ok)
-    estimator_.add_pair(stamp_prev, stamp_curr, rotation_vector(r.T_prev_curr.linear()),
-                        r.covariance.bottomRightCorner<3, 3>());
+    estimator_.add_pair(stamp_prev, stamp_curr, rotation_vector(r.T_prev_curr.linear()));
   const LatencyEstimate& e = estimator_.estimate();
-  // The applied latency follows the estimate once it is known well enough, at most
-  // latency.max_slew seconds per second of frames and never so far that the frames' order changes.
+  // The applied latency follows the estimate once it is known well enough and stands clear
+  // of it (more than two standard errors: a move within the estimate's own noise would only
+  // stretch pairs), at most latency.max_slew seconds per second of frames, never so far that
+  // the frames' order changes.
   const double dt = static_cast<double>(stamp_curr - stamp_prev) * 1e-9;
-  if (e.known && e.sigma_s <= config_.converged_sigma_s && dt > 0) {
+  const double gap = e.latency_s - applied_s_;
+  if (e.known && e.sigma_s <= config_.converged_sigma_s && dt > 0 && std::abs(gap) > 2 * e.sigma_s) {
     const double step = std::min(config_.max_slew * dt, 0.25 * dt);
-    applied_s_ += std::clamp(e.latency_s - applied_s_, -step, step);
+    applied_s_ += std::clamp(gap, -step, step);
   }
+  // Each frame keeps the capture time it was given as a pair's current frame, so that the
+  // pairs chain (a consumer integrating them, the evaluation's windows); while the applied
+  // latency moves, a pair's interval differs from its stamps' by that step.
   const std::int64_t shift = seconds_to_ns(applied_s_);
   const std::int64_t prev_shift = last_curr_stamp_ns_ == stamp_prev ? last_curr_shift_ns_ : shift;
   r.t_prev_ns = stamp_prev - prev_shift;
@@ -340,6 +351,7 @@ void CaptureClock::stamp(PairResult& r) {
   timing_.known = e.known;
   timing_.latency_s = e.latency_s;
   timing_.sigma_s = e.sigma_s;
+  timing_.axis_spread_s = e.axis_spread_s;
   timing_.applied_s = applied_s_;
   timing_.pairs = e.pairs;
   if (++pairs_since_mount_ >= kMountEveryPairs) {

@@ -262,7 +262,6 @@ class Run {
         r.features_prev = static_cast<int>(prev.frame.features.keypoints.size());
         r.features_curr = static_cast<int>(curr.frame.features.keypoints.size());
         estimator_.forget_motion();
-        capture_clock_.forget();
       } else {
         estimator_.set_colour_latency_sigma(capture_clock_.colour_latency_sigma_s());
         out.result = estimator_.estimate(prev.frame, curr.frame);

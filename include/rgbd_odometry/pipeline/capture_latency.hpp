@@ -11,10 +11,11 @@
 // every pair weighing the same (solve() says why). The cost J(d) = sum_k |r_k|^2 with b
 // solved in closed form per d is kept as running sums (allocated once), so each pair costs a
 // fixed amount of work. The latency is J's minimum (refined between grid points by a
-// parabola); its standard error is sqrt(2 s^2 / J''), s^2 the residuals' own scatter. Only a change of rate across a pair
-// says anything about d (dr/dd is that change): a camera at rest adds nothing, and forgets
-// nothing either, so the estimate holds while the vehicle waits; a moving camera's older pairs
-// fade over latency.memory_s, so a slowly changing latency is followed.
+// parabola); its standard error is sqrt(2 s^2 / J''), s^2 the residuals' own scatter.
+// Only a change of rate across a pair says anything about d (dr/dd is that change): a camera
+// at rest is left out and forgets nothing, so the estimate holds while the vehicle waits; a
+// turning camera's older pairs fade over latency.memory_s, so a slowly changing latency is
+// followed. A pair far from the estimate (a failed fit) is left out.
 //
 // The gyro changes the time, never the motion: the autopilot's filter has its gyro already,
 // and a motion fused with it would carry errors twice.
@@ -47,6 +48,7 @@ struct LatencyEstimate {
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();  // rad/s, body, at that latency
   std::uint64_t pairs = 0;     // pairs the estimate has seen
   std::uint64_t rejected = 0;  // pairs too far from it to be believed (a failed fit), left out
+  std::uint64_t at_rest = 0;   // pairs of a camera at rest: nothing to learn from them
   std::uint64_t uncovered = 0; // pairs the gyro samples did not cover (a gap, before the first)
 };
 
@@ -63,10 +65,9 @@ class CaptureLatencyEstimator {
 
   // Gyro samples in time order (older or equal stamps than the newest held are dropped).
   void add_gyro(std::span<const GyroSample> samples);
-  // A solved pair on the stamps' timeline (its colour stamps), its rotation vector (camera
-  // frame) and that rotation's covariance. Held until the gyro covers every offset searched.
-  void add_pair(std::int64_t t_prev_ns, std::int64_t t_curr_ns, const Eigen::Vector3d& rotation,
-                const Eigen::Matrix3d& rotation_covariance);
+  // A solved pair on the stamps' timeline (its colour stamps) and its rotation vector (camera
+  // frame). Held until the gyro covers every offset searched.
+  void add_pair(std::int64_t t_prev_ns, std::int64_t t_curr_ns, const Eigen::Vector3d& rotation);
   // The gyro samples a pair stamped t_curr_ns needs, up to this time.
   std::int64_t gyro_needed_until_ns(std::int64_t t_curr_ns) const;
 
@@ -78,16 +79,20 @@ class CaptureLatencyEstimator {
   struct Pair {
     std::int64_t t_prev_ns = 0, t_curr_ns = 0;
     Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // camera frame
-    bool turning = false;  // clear of its own noise
   };
   struct Gyro {
     std::int64_t t_ns = 0;
     Eigen::Vector3d rate = Eigen::Vector3d::Zero();
-    Eigen::Vector3d integral = Eigen::Vector3d::Zero();  // since the first sample held
+    Eigen::Vector3d integral = Eigen::Vector3d::Zero();  // since the segment's first sample
+    std::uint64_t segment = 0;  // samples without a gap between them share one
   };
-  // The gyro's integral from its first held sample to t; nullopt outside the samples held or
-  // across a gap longer than kMaxGyroGapNs.
-  std::optional<Eigen::Vector3d> integral_at(std::int64_t t_ns) const;
+  struct Integral {
+    Eigen::Vector3d value;
+    std::uint64_t segment;
+  };
+  // The gyro's running integral at t; nullopt outside the samples held or inside a gap.
+  std::optional<Integral> integral_at(std::int64_t t_ns) const;
+  // Over [from, to]; nullopt where that is not covered without a gap.
   std::optional<Eigen::Vector3d> integral_over(std::int64_t from_ns, std::int64_t to_ns) const;
   const Gyro& gyro(std::size_t i) const { return gyro_[(gyro_first_ + i) % gyro_.size()]; }
   void process(const Pair& p);
@@ -123,12 +128,9 @@ class CaptureClock {
   // covariance.colour_latency_sigma_s; nullopt while the latency is not measured.
   std::optional<double> colour_latency_sigma_s() const;
   // Learns from a finished pair (stamps as the sensor gave them) and restamps it at the
-  // capture instants: t_prev at the instant its frame was given as that pair's current frame,
-  // t_curr at the latency applied now. Fills r.timing.
+  // capture instants: t_prev at the instant its frame was given as the previous pair's current
+  // frame, t_curr at the latency applied now. Fills r.timing.
   void stamp(PairResult& r);
-  // A gap in the frames: the next pair's previous frame was not stamped here.
-  void forget() { last_curr_stamp_ns_.reset(); }
-
   bool active() const { return feed_ != nullptr; }
   const LatencyEstimate& estimate() const { return estimator_.estimate(); }
 
