@@ -18,16 +18,19 @@ Matrix6d change_outer_product(const Vector6d& change, const Matrix6d& noise) {
   return (1.0 - 6.0 / whitened) * change * change.transpose();
 }
 
-// sigma_c^2 M + sigma_d^2 G M G^T: one outer product of rates through both latencies.
+// sigma_c^2 M + sigma_d^2 G M G^T + sigma_t^2 M_tt: one outer product of rates through the latencies.
 Matrix6d through_latencies(const LatencySigmas& s, const Matrix6d& depth_response, const Matrix6d& m) {
-  return s.colour_s * s.colour_s * m + s.depth_s * s.depth_s * depth_response * m * depth_response.transpose();
+  Matrix6d c = s.colour_s * s.colour_s * m + s.depth_s * s.depth_s * depth_response * m * depth_response.transpose();
+  c.topLeftCorner<3, 3>() += s.translation_s * s.translation_s * m.topLeftCorner<3, 3>();
+  return c;
 }
 
 }  // namespace
 
 Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_response, const PairRate& curr,
                             const std::optional<PairRate>& previous) {
-  if (curr.dt_s <= 0 || (sigmas.colour_s <= 0 && sigmas.depth_s <= 0)) return Matrix6d::Zero();
+  if (curr.dt_s <= 0 || (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0))
+    return Matrix6d::Zero();
   // The change of rate between the pair's two frames, from the two pairs' mean rates (whose
   // midpoints are (dt + dt') / 2 apart), and how much of its outer product is their noise.
   Vector6d change = curr.rate;

@@ -253,6 +253,7 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   const Eigen::Isometry3d seed = transform_from_xi(xi_from_transform(fit_.T_prev_curr) * to_depth);
   aligner_.align(prev.cloud, curr.cloud, seed, alignment_);
   if (!alignment_.ok) return 0;
+  depth_rotation_ = rotation_vector(alignment_.T_prev_curr.linear());  // over the depth interval, unfused
   if (learn) depth_noise_.update(alignment_.depth_noise_coeff);
   const Eigen::Isometry3d T_depth = transform_from_xi(xi_from_transform(alignment_.T_prev_curr) / to_depth);
   const Matrix6d own_cov = alignment_.covariance / (to_depth * to_depth);
@@ -422,7 +423,13 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
     // The features' own rate, kept before the fusion changes fit_ and cov (last_feature_pair_).
     const std::optional<PairRate> features_only =
         dt_s > 0 ? std::optional<PairRate>(PairRate{xi / dt_s, cov, dt_s}) : std::nullopt;
+    depth_rotation_.reset();
     r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov, r.depth_trusted);
+    if (depth_rotation_) {
+      r.depth_rotation = *depth_rotation_;
+      r.t_depth_prev_ns = r.t_prev_ns - (prev.times.t_colour_ns - prev.times.t_depth_ns);
+      r.t_depth_curr_ns = r.t_curr_ns - (curr.times.t_colour_ns - curr.times.t_depth_ns);
+    }
     if (features_only) last_feature_pair_ = features_only;
     r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
                 depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),

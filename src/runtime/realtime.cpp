@@ -263,7 +263,7 @@ class Run {
         r.features_curr = static_cast<int>(curr.frame.features.keypoints.size());
         estimator_.forget_motion();
       } else {
-        estimator_.set_colour_latency_sigma(capture_clock_.colour_latency_sigma_s());
+        estimator_.set_latency_sigmas(capture_clock_.latency_sigmas());
         out.result = estimator_.estimate(prev.frame, curr.frame);
       }
       if (!PairEstimator::dropped_frame(out.result)) capture_clock_.stamp(out.result);

@@ -37,6 +37,11 @@ struct PairResult {
   bool depth_trusted = false;  // fused at the learnt trust, not at refinement.distrusted_sigma_scale
   SensorEstimates sensor;  // the sensor's constants as learnt up to this pair
   CaptureTiming timing;    // t_prev_ns, t_curr_ns restamped at the capture instants, when a gyro is read
+  // The depth maps' own rotation (their alignment's, before any fusion) over the depth frames'
+  // interval, stamped on the pair's timeline before any restamping: the depth stream's latency
+  // is measured against the gyro with it. NaN where the depths were not aligned.
+  Eigen::Vector3d depth_rotation = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::int64_t t_depth_prev_ns = 0, t_depth_curr_ns = 0;
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
   StageTimes times;

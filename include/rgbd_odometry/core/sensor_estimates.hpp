@@ -30,6 +30,8 @@ struct CaptureTiming {
   double sigma_s = 0;      // its standard error
   double axis_spread_s = 0;  // the rotation axes' own latencies about it (pipeline/capture_latency.hpp)
   double applied_s = 0;    // what this pair's current frame was restamped by
+  bool depth_known = false;   // the depth alignment's rotations' latency, behind the depth stamps
+  double depth_latency_s = 0, depth_sigma_s = 0;
   std::uint64_t pairs = 0; // pairs measured against the gyro so far
   bool mount_known = false;
   double mount_roll_deg = 0, mount_pitch_deg = 0, mount_yaw_deg = 0;

@@ -117,6 +117,12 @@ class CaptureLatencyEstimator {
   LatencyEstimate estimate_;
 };
 
+// What the latency terms of the covariance take from the measurement (latency_covariance.hpp);
+// nullopt where the priors stand.
+struct MeasuredLatencySigmas {
+  std::optional<double> colour_s, depth_s, translation_s;
+};
+
 // The latency applied: each pair stamped at its frames' capture instants. Lives on the
 // estimation thread, next to the PairEstimator whose covariance it informs.
 class CaptureClock {
@@ -124,20 +130,32 @@ class CaptureClock {
   // feed: the gyro's samples (live: the autopilot's; a replay: imu.txt), null for none.
   CaptureClock(const Config& config, GyroFeed* feed);
 
-  // The colour latency's standard error the covariance should carry instead of
-  // covariance.colour_latency_sigma_s; nullopt while the latency is not measured.
+  // What the covariance should carry instead of covariance.colour_latency_sigma_s: the colour
+  // latency's standard error, the axes' spread and what is not applied yet; nullopt while the
+  // latency is not measured.
   std::optional<double> colour_latency_sigma_s() const;
+  // Instead of covariance.depth_latency_sigma_s: the depth's lag behind the colour, which is not
+  // corrected, measured as the depth alignment's rotations' latency less the colour's (rms with
+  // both standard errors); nullopt while either is not measured.
+  std::optional<double> depth_latency_sigma_s() const;
+  // The depth alignment's rotations' latency less the pairs': the depth's lag behind the colour
+  // beyond their stamps; nullopt while either is not measured.
+  std::optional<double> depth_lag_s() const;
+  // All three, for PairEstimator::set_latency_sigmas.
+  MeasuredLatencySigmas latency_sigmas() const;
   // Learns from a finished pair (stamps as the sensor gave them) and restamps it at the
   // capture instants: t_prev at the instant its frame was given as the previous pair's current
   // frame, t_curr at the latency applied now. Fills r.timing.
   void stamp(PairResult& r);
   bool active() const { return feed_ != nullptr; }
   const LatencyEstimate& estimate() const { return estimator_.estimate(); }
+  const LatencyEstimate& depth_estimate() const { return depth_estimator_.estimate(); }
 
  private:
   LatencyConfig config_;
   GyroFeed* feed_;
-  CaptureLatencyEstimator estimator_;
+  CaptureLatencyEstimator estimator_;        // the pairs' rotations: the colour's latency
+  CaptureLatencyEstimator depth_estimator_;  // the depth alignment's rotations: the depth's
   std::vector<GyroSample> taken_;  // one take()'s buffer, sized once
   double applied_s_ = 0;
   CaptureTiming timing_;  // as of the last pair, its mount refreshed every kMountEveryPairs

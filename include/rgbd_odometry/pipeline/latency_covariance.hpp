@@ -19,7 +19,7 @@
 //    the fit (`depth_response`, PerturbationCovariance::depth_latency_response).
 // Both are errors of the pair, not of a point: no number of points averages them away.
 // With d ~ N(0, sigma^2), each pair gets, with D = the change of rate between its two frames,
-//    per pair:  sigma_c^2 D D^T + sigma_d^2 G D D^T G^T.
+//    per pair:  sigma_c^2 D D^T + sigma_d^2 G D D^T G^T (+ sigma_t^2 D_t D_t^T, below).
 // D is estimated from this pair's and the previous pair's rates, whose own noise would
 // inflate D D^T by their covariances: D D^T is shrunk by the share of it that noise explains.
 // Across pairs the error telescopes: over a window it is d times the change of rate between
@@ -28,6 +28,10 @@
 //    over windows:  (dt / T_w) (sigma_c^2 (r r^T + r' r'^T) + sigma_d^2 G (...) G^T),
 // r and r' this pair's and the previous pair's rates: summed over the pairs of a window, it is
 // sigma^2 (2 x the mean r r^T), what the change of rate between its ends has on average.
+// A pair restamped at the instant its rotations were taken (measured against a gyro) still has
+// its translations from an instant between the colour's and the depth's: sigma_t (the depth's
+// measured lag behind the colour) enters the translation block alone, D_t the translational
+// part of the change of rate.
 #include <optional>
 
 #include "rgbd_odometry/core/config.hpp"
@@ -45,11 +49,14 @@ struct PairRate {
 struct LatencySigmas {
   double colour_s = 0;             // sigma of the colour stream's latency behind its stamps
   double depth_s = 0;              // sigma of the depth stream's latency behind the colour
+  // sigma of the translations' instant apart from the rotations' (the translation alone: a
+  // pair restamped at its rotations' measured instant, pipeline/capture_latency.hpp; 0 otherwise)
+  double translation_s = 0;
   double integration_window_s = 0;  // T_w; <= 0: no window share
 };
 
 inline LatencySigmas latency_sigmas(const CovarianceConfig& c) {
-  return {c.colour_latency_sigma_s, c.depth_latency_sigma_s, c.integration_window_s};
+  return {c.colour_latency_sigma_s, c.depth_latency_sigma_s, 0, c.integration_window_s};
 }
 
 // The latency covariance of pair `curr`; previous: the pair before it, when the two are

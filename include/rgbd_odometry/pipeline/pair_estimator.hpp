@@ -12,6 +12,7 @@
 #include "rgbd_odometry/core/config.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
+#include "rgbd_odometry/pipeline/capture_latency.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
 #include "rgbd_odometry/pipeline/keypoint_sigma.hpp"
@@ -35,11 +36,14 @@ class PairEstimator {
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
   static bool dropped_frame(const PairResult& r) { return r.status == Status::StampNotIncreasing; }
 
-  // The colour stream's latency behind its stamps, where it is measured against the autopilot's
-  // gyro (pipeline/capture_latency.hpp): its standard error replaces
-  // covariance.colour_latency_sigma_s in the pairs' latency terms; nullopt: that prior.
-  void set_colour_latency_sigma(std::optional<double> measured_s) {
-    latency_.colour_s = measured_s.value_or(config_.covariance.colour_latency_sigma_s);
+  // The streams' latencies, where they are measured against the autopilot's gyro
+  // (pipeline/capture_latency.hpp): what is left of each replaces covariance.colour_latency_sigma_s
+  // and depth_latency_sigma_s in the pairs' latency terms (latency_covariance.hpp); nullopt: that
+  // prior.
+  void set_latency_sigmas(const MeasuredLatencySigmas& measured) {
+    latency_.colour_s = measured.colour_s.value_or(config_.covariance.colour_latency_sigma_s);
+    latency_.depth_s = measured.depth_s.value_or(config_.covariance.depth_latency_sigma_s);
+    latency_.translation_s = measured.translation_s.value_or(0);
   }
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
@@ -117,6 +121,8 @@ class PairEstimator {
   // The same pair's features alone, before any fusion with the depth alignment: the depth's lag
   // is read against their change of rate, which the alignment fused into them would bias.
   std::optional<PairRate> last_feature_pair_;
+  // This pair's depth alignment's own rotation, over the depth frames' interval (refine_with_depth).
+  std::optional<Eigen::Vector3d> depth_rotation_;
 };
 
 }  // namespace rgbdo
