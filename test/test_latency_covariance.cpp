@@ -55,6 +55,22 @@ TEST(LatencyCovariance, AChangeOfRateAddsItsOuterProductThroughBothLatencies) {
   EXPECT_NEAR(std::sqrt(c(2, 2)), std::hypot(0.01 * 0.2, 0.03 * 0.2), 1e-6);
 }
 
+TEST(LatencyCovariance, TheTranslationsOwnInstantEntersTheTranslationAlone) {
+  // A pair restamped at its rotations' instant: its translations' instant is apart by up to
+  // sigma_t, which adds sigma_t^2 D_t D_t^T to the translation block and nothing else.
+  const PairRate prev{rate_of(0.1, 0, 0, 0, 0.2, 0), Matrix6d::Zero(), 1.0 / 30};
+  const PairRate curr{rate_of(0.3, -0.1, 0, 0.1, 0.1, 0), Matrix6d::Zero(), 1.0 / 30};
+  LatencySigmas s{0.002, 0.0, 0.0};
+  const Matrix6d without = latency_covariance(s, Matrix6d::Zero(), curr, prev);
+  s.translation_s = 0.01;
+  const Matrix6d with = latency_covariance(s, Matrix6d::Zero(), curr, prev);
+  const Eigen::Vector3d change_t = (curr.rate - prev.rate).head<3>();  // stretch 1: equal intervals
+  const Matrix6d added = with - without;
+  EXPECT_LT((added.topLeftCorner<3, 3>() - 1e-4 * change_t * change_t.transpose()).norm(), 1e-12);
+  EXPECT_EQ(added.bottomRows(3).norm(), 0.0);
+  EXPECT_EQ(added.topRightCorner(3, 3).norm(), 0.0);
+}
+
 TEST(LatencyCovariance, ThePairsOwnNoiseIsNotTakenForAChangeOfRate) {
   // Two pairs at the same rate, each measured with noise C: the difference of their measured
   // rates is noise, var 2 C / dt^2. Plain D D^T would report it as a change; what is kept

@@ -49,14 +49,14 @@ struct PairRate {
 struct LatencySigmas {
   double colour_s = 0;             // sigma of the colour stream's latency behind its stamps
   double depth_s = 0;              // sigma of the depth stream's latency behind the colour
+  double integration_window_s = 0;  // T_w; <= 0: no window share
   // sigma of the translations' instant apart from the rotations' (the translation alone: a
   // pair restamped at its rotations' measured instant, pipeline/capture_latency.hpp; 0 otherwise)
   double translation_s = 0;
-  double integration_window_s = 0;  // T_w; <= 0: no window share
 };
 
 inline LatencySigmas latency_sigmas(const CovarianceConfig& c) {
-  return {c.colour_latency_sigma_s, c.depth_latency_sigma_s, 0, c.integration_window_s};
+  return {c.colour_latency_sigma_s, c.depth_latency_sigma_s, c.integration_window_s, 0};
 }
 
 // The latency covariance of pair `curr`; previous: the pair before it, when the two are
