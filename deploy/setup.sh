@@ -91,9 +91,9 @@ build() {
 run_demo() {
   build build/release -DCMAKE_BUILD_TYPE=Release
   mkdir -p build/demo
-  log "replaying the bundled frames (test/data/fr1_xyz, TUM RGB-D fr1_xyz, CC BY 4.0)"
+  log "replaying the bundled frames (test/data/fr1_xyz, TUM RGB-D fr1_xyz, CC BY 4.0) with an autopilot's gyro made from its ground truth"
   build/release/rgbd-odometry --source tum:test/data/fr1_xyz --config deploy/config/tum-fr1.yaml \
-    --log build/demo/odometry.csv --trajectory build/demo/trajectory.txt
+    --imu test/data/imu/fr1_xyz.txt --log build/demo/odometry.csv --trajectory build/demo/trajectory.txt
   log "odometry log: build/demo/odometry.csv   trajectory: build/demo/trajectory.txt"
 }
 
@@ -174,7 +174,7 @@ run_fuzz_sweep() {
     echo "fuzz-sweep: seeds must be whole numbers (got '$first' '$last')" >&2
     exit 2
   fi
-  build_sanitized fuzz_config_file fuzz_config_overrides fuzz_tum_sequence fuzz_uris fuzz_images fuzz_mavlink
+  build_sanitized fuzz_config_file fuzz_config_overrides fuzz_tum_sequence fuzz_imu_file fuzz_uris fuzz_images fuzz_mavlink
   local seed
   for ((seed = first; seed <= last; seed++)); do
     log "fuzzing every target with seed $seed"
