@@ -27,7 +27,8 @@ std::string capture_latency_text(const CaptureTiming& t) {
     s << ", depth " << t.depth_latency_s * 1e3 << " +- " << t.depth_sigma_s * 1e3 << " ms behind its stamps";
   else
     s << "capture latency not measured yet against the gyro";
-  s << " (applied " << t.applied_s * 1e3 << " ms; " << t.pairs << " pairs)";
+  s << " (applied " << t.applied_s * 1e3 << " ms; " << t.pairs << " pairs, " << t.uncovered << " not covered by the gyro, "
+    << t.rejected << " left out as failed fits, " << t.at_rest << " at rest)";
   return s.str();
 }
 

@@ -386,6 +386,9 @@ void CaptureClock::stamp(PairResult& r) {
   timing_.depth_sigma_s = depth_estimator_.estimate().sigma_s;
   timing_.applied_s = applied_s_;
   timing_.pairs = e.pairs;
+  timing_.uncovered = e.uncovered;
+  timing_.rejected = e.rejected;
+  timing_.at_rest = e.at_rest;
   if (++pairs_since_mount_ >= kMountEveryPairs) {
     pairs_since_mount_ = 0;
     const MountEstimate m = estimator_.mount();

@@ -45,6 +45,13 @@
 //                       0.0312,-0.0187; none: not streamed)
 //   --ardupilot         HEARTBEAT as ArduPilot (MAV_AUTOPILOT_ARDUPILOTMEGA); the EKF origin the
 //                       program sends (SET_GPS_GLOBAL_ORIGIN, SET_HOME_POSITION) goes to the result
+//   --gyro-groundtruth F   ATTITUDE's rates are the body rates (FRD, the camera mounted as an all-zero
+//                       body: configuration assumes) of this TUM groundtruth.txt, as make_imu.py
+//                       makes them, with --gyro-bias bx,by,bz and --gyro-noise rad/s, at the
+//                       instant of the recording the virtual sensor is playing: --gyro-clock-file
+//                       is the file it writes (RGBDO_VIRTUAL_SENSOR_CLOCK_FILE); until it exists
+//                       the rates are zero. --gyro-delay-ms D stamps them D ms late (a filtered or
+//                       late-stamped gyro). The streams' rate is what MAV_CMD_SET_MESSAGE_INTERVAL asks.
 // Exit status: 0 all assertions held, 1 some did not (see the result's "failures"), 64 usage.
 
 import dgram from 'node:dgram';
@@ -76,7 +83,7 @@ function parseArgs(argv) {
   const o = {
     offsetNs: 1_234_567_000_000n, timesyncHz: 10, loss: 0, reorder: 0, garbage: 0, seed: 1, startAfterMs: 0,
     expectConverged: false, attitude: [0.0312, -0.0187], silentAfterAnswers: null, silentForHeartbeats: 3, exitAfterHeartbeats: null,
-    idleExitMs: 3000, maxMs: 300_000,
+    idleExitMs: 3000, maxMs: 300_000, gyroDelayMs: 0, gyroBias: [0.010, -0.006, 0.008], gyroNoise: 0.005,
   };
   const num = (a, v) => { if (v === undefined || !/^-?\d+(\.\d+)?$/.test(v)) usage(`${a} needs a number`); return Number(v); };
   for (let i = 0; i < argv.length; i++) {
@@ -105,12 +112,58 @@ function parseArgs(argv) {
       case '--max-ms': o.maxMs = num(a, next()); break;
       case '--ardupilot': o.ardupilot = true; break;
       case '--attitude': { const v = next(); o.attitude = v === 'none' ? null : v.split(',').map(Number); break; }
+      case '--gyro-groundtruth': o.gyroGroundtruth = next(); break;
+      case '--gyro-clock-file': o.gyroClockFile = next(); break;
+      case '--gyro-delay-ms': o.gyroDelayMs = num(a, next()); break;
+      case '--gyro-bias': o.gyroBias = next().split(',').map(Number); break;
+      case '--gyro-noise': o.gyroNoise = num(a, next()); break;
       default: usage(`unknown argument '${a}'`);
     }
   }
   if ([o.udpListen, o.udpSend, o.fd].filter((x) => x !== undefined).length !== 1) usage('give one of --udp-listen, --udp-send, --fd');
   if (!o.result) usage('--result is required');
   return o;
+}
+
+// The body rate (rad/s, FRD; x_body = z_camera, y_body = x_camera, z_body = y_camera) of a TUM
+// groundtruth.txt at time t (s), as make_imu.py (../shared/tools/imu-from-groundtruth) makes it:
+// the relative rotation of the poses slerped 5 ms either side, over 10 ms. Null outside it.
+function groundTruthGyro(path) {
+  const G = fs.readFileSync(path, 'utf8').split('\n').filter((l) => l && !l.startsWith('#'))
+    .map((l) => l.trim().split(/\s+/).map(Number)).filter((p) => p.length >= 8).map((p) => [p[0], p.slice(4, 8)])
+    .sort((a, b) => a[0] - b[0]);
+  const R = ([x, y, z, w]) => {
+    const n = Math.hypot(x, y, z, w); x /= n; y /= n; z /= n; w /= n;
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]];
+  };
+  const slerp = (q0, q1, a) => {
+    let d = q0.reduce((s, v, i) => s + v * q1[i], 0);
+    if (d < 0) { q1 = q1.map((v) => -v); d = -d; }
+    let q;
+    if (d > 0.9995) q = q0.map((v, i) => v + a * (q1[i] - v));
+    else { const th = Math.acos(d), s = Math.sin(th); q = q0.map((v, i) => (Math.sin((1 - a) * th) * v + Math.sin(a * th) * q1[i]) / s); }
+    const n = Math.hypot(...q); return q.map((v) => v / n);
+  };
+  const at = (t) => {
+    let lo = 0, hi = G.length - 1;
+    if (t < G[0][0] || t >= G[hi][0]) return null;
+    while (hi - lo > 1) { const m = (lo + hi) >> 1; if (G[m][0] <= t) lo = m; else hi = m; }
+    const [t0, q0] = G[lo], [t1, q1] = G[hi];
+    return slerp(q0, q1, t1 > t0 ? (t - t0) / (t1 - t0) : 0);
+  };
+  const h = 0.005;
+  return (t) => {
+    const qa = at(t - h), qb = at(t + h);
+    if (!qa || !qb) return null;
+    const A = R(qa), B = R(qb);
+    const M = [0, 1, 2].map((i) => [0, 1, 2].map((j) => A[0][i] * B[0][j] + A[1][i] * B[1][j] + A[2][i] * B[2][j]));
+    const c = Math.max(-1, Math.min(1, (M[0][0] + M[1][1] + M[2][2] - 1) / 2)), th = Math.acos(c);
+    const k = th < 1e-9 ? 0.5 : th / (2 * Math.sin(th));
+    const wc = [M[2][1] - M[1][2], M[0][2] - M[2][0], M[1][0] - M[0][1]].map((v) => k * v / (2 * h));
+    return [wc[2], wc[0], wc[1]];
+  };
 }
 
 // A small deterministic PRNG (mulberry32), so a run's unkindness can be replayed.
@@ -180,7 +233,7 @@ function main() {
     trueOffsetUs: truthUs, heartbeatsSent: 0, requestsSent: 0, answersReceived: 0, answersUsed: 0,
     answersRttRejected: 0, answersNotOurs: 0, causalityViolations: 0, ourAnswersToProgram: 0,
     programHeartbeats: 0, programRequests: 0, odometry: 0, framesFromProgram: 0, badFromProgram: 0,
-    origins: [], homePositions: [], visionPositionDelta: 0, attitudeSent: 0, intervalRequests: [],
+    origins: [], homePositions: [], visionPositionDelta: 0, attitudeSent: 0, intervalRequests: [], gyroSamples: 0,
     rules: { staleFused: 0, notAfterPrevious: 0, deltaDropped: 0, beforeOrigin: 0 },
     framesDropped: 0, framesReordered: 0, garbageBytes: 0, startByteNoise: 0, requestsDelivered: 0,
     requestsDeliveredWhileHeard: 0, corruptFrames: 0, unknownFrames: 0, v1Frames: 0,
@@ -368,6 +421,26 @@ function main() {
     if (!talking && opt.udpSend === undefined) startTalking();  // PX4 answers whoever talks to it
   }
 
+  // ---- the gyro, from ground truth ----
+  const gyro = opt.gyroGroundtruth ? groundTruthGyro(opt.gyroGroundtruth) : null;
+  let gyroClock = null;  // [start ns (our clock), the recording's time then (ns), pass ns]
+  const gyroNormal = () => { const u = Math.max(random(), 1e-12), v = random(); return Math.sqrt(-2 * Math.log(u)) * Math.cos(2 * Math.PI * v); };
+  function gyroRates(nowNs) {
+    if (!gyro) return null;
+    if (!gyroClock && opt.gyroClockFile && fs.existsSync(opt.gyroClockFile)) {
+      const f = fs.readFileSync(opt.gyroClockFile, 'utf8').trim().split(/\s+/).map((x) => BigInt(x));
+      if (f.length === 3) gyroClock = f;
+    }
+    if (!gyroClock) return [0, 0, 0];
+    const [start, recorded, pass] = gyroClock;
+    let sinceNs = Number(nowNs - start);
+    if (pass > 0n) sinceNs = ((sinceNs % Number(pass)) + Number(pass)) % Number(pass);
+    const w = gyro(Number(recorded) * 1e-9 + sinceNs * 1e-9);
+    if (!w) return [0, 0, 0];
+    r.gyroSamples++;
+    return w.map((x, k) => x + opt.gyroBias[k] + opt.gyroNoise * gyroNormal());
+  }
+
   // ---- our streams ----
   let timers = [];
   let attitudeTimer = null, attitudeFn = null;
@@ -397,8 +470,12 @@ function main() {
     const attitude = () => {
       if (silentUntilHeartbeats !== null) return;
       const m = new common.Attitude();
-      m.timeBootMs = Number((ourNowNs() / 1_000_000n) & 0xFFFFFFFFn);
+      const nowNs = monotonicNs();
+      // Stamped when sent (ArduPilot) or published (PX4): --gyro-delay-ms later than measured.
+      m.timeBootMs = Number(((nowNs + opt.offsetNs + BigInt(Math.round(opt.gyroDelayMs * 1e6))) / 1_000_000n) & 0xFFFFFFFFn);
       [m.roll, m.pitch] = opt.attitude; m.yaw = 1.2;
+      const w = gyroRates(nowNs);
+      if (w) [m.rollspeed, m.pitchspeed, m.yawspeed] = w;
       r.attitudeSent++; send(frame(m));
     };
     attitudeFn = opt.attitude ? attitude : null;

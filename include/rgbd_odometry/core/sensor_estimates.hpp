@@ -33,6 +33,7 @@ struct CaptureTiming {
   bool depth_known = false;   // the depth alignment's rotations' latency, behind the depth stamps
   double depth_latency_s = 0, depth_sigma_s = 0;
   std::uint64_t pairs = 0; // pairs measured against the gyro so far
+  std::uint64_t uncovered = 0, rejected = 0, at_rest = 0;  // of those: no gyro over them, a failed fit's, at rest
   bool mount_known = false;
   double mount_roll_deg = 0, mount_pitch_deg = 0, mount_yaw_deg = 0;
   int mount_pairs = 0;

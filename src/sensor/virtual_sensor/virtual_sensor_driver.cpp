@@ -21,6 +21,11 @@
 // When the recording has been played to its end the device unplugs itself for good: a
 // program reading it sees what it would see of a sensor pulled out for ever.
 // The device is also announced at start-up when RGBDO_VIRTUAL_SENSOR holds such a URI.
+// When RGBDO_VIRTUAL_SENSOR_CLOCK_FILE names a file, the player writes it a line
+// "START_NS RECORDED_NS PASS_NS" when it starts: the steady clock (CLOCK_MONOTONIC) at which the
+// recording's first instant RECORDED_NS is due (its device time 0; later frames are due and
+// stamped (t - RECORDED_NS) / rate after it) and the time between passes of a looped recording:
+// a test's simulated autopilot maps the recording's ground truth onto the program's clock with it.
 #include <Driver/OniDriverAPI.h>
 
 #include <algorithm>
@@ -28,6 +33,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -252,6 +258,18 @@ class VirtualDevice : public oni::driver::DeviceBase {
   const OniDeviceInfo& info() const { return info_; }
 
  private:
+  static void write_clock_file(std::chrono::steady_clock::time_point start, std::int64_t recorded_ns,
+                               std::int64_t pass_ns) {
+    const char* path = std::getenv("RGBDO_VIRTUAL_SENSOR_CLOCK_FILE");
+    if (path == nullptr) return;
+    const auto start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(start.time_since_epoch()).count();
+    if (std::FILE* f = std::fopen(path, "w")) {
+      std::fprintf(f, "%lld %lld %lld\n", static_cast<long long>(start_ns), static_cast<long long>(recorded_ns),
+                   static_cast<long long>(pass_ns));
+      std::fclose(f);
+    }
+  }
+
   // Plays the recording in real time (scaled by rate) to whichever streams are started.
   void play() {
     const std::vector<Event> events = read_events(options_.directory);
@@ -279,6 +297,7 @@ class VirtualDevice : public oni::driver::DeviceBase {
     // Each pass of a looped recording follows the last one a frame period later, on one clock,
     // shifted by whole microseconds (the timestamps' unit): every pass has the same intervals.
     const std::int64_t pass_ns = (events.back().t_ns - t0_ns + 1'000'000'000 / kFps) / 1000 * 1000;
+    if (!resumed) write_clock_file(start, t0_ns, pass_ns);
     for (int pass = 0; pass < options_.loops; ++pass) {
       for (const Event& e : events) {
         if (stop_) return;
