@@ -161,8 +161,9 @@ struct LatencyConfig {
   double memory_s = 30;
   // Applied once its standard error is this small (before: the stamps, and the priors).
   double converged_sigma_s = 0.005;
-  // How fast the applied latency may move towards the estimate: seconds per second of frames,
-  // so that no two frames change order and a consumer's velocities are not jolted.
+  // How fast the applied latency may move towards the estimate at most (it moves a tenth of
+  // the way a frame): seconds per second of frames, so that no two frames change order and a
+  // consumer's velocities are not jolted.
   double max_slew = 0.05;
   // A measured camera mount further than this from body.* is warned about, degrees.
   double mount_warning_deg = 5;
