@@ -313,5 +313,33 @@ TEST(CaptureClock, TurnedOffByConfigurationTheGyroIsNotRead) {
   EXPECT_FALSE(clock.active());
 }
 
+TEST(CaptureTimingText, SaysWhatIsMeasuredAndWarnsOfAMountOffByMoreThanTheBound) {
+  CaptureTiming t;
+  EXPECT_EQ(capture_latency_text(t), "") << "no gyro, nothing to say";
+  t.gyro = true;
+  t.pairs = 12;
+  EXPECT_EQ(capture_latency_text(t).rfind("capture latency not measured yet against the gyro (applied 0.0 ms; 12 pairs", 0), 0u);
+  t.known = true;
+  t.latency_s = 0.0164;
+  t.sigma_s = 0.0009;
+  t.axis_spread_s = 0.0047;
+  t.applied_s = 0.0161;
+  EXPECT_EQ(capture_latency_text(t).rfind("capture latency 16.4 +- 0.9 ms against the gyro, axes 4.7 ms apart (applied 16.1 ms", 0), 0u)
+      << capture_latency_text(t);
+  t.depth_known = true;
+  t.depth_latency_s = 0.0259;
+  t.depth_sigma_s = 0.0008;
+  EXPECT_NE(capture_latency_text(t).find("apart, depth 25.9 +- 0.8 ms behind its stamps (applied"), std::string::npos)
+      << capture_latency_text(t);
+  EXPECT_EQ(mount_text(t, 0, 0, 0, 5), "") << "not measured";
+  t.mount_known = true;
+  t.mount_yaw_deg = -10.5;
+  t.mount_pairs = 115;
+  EXPECT_EQ(mount_text(t, 0, 0, 0, 5).rfind("WARNING: mount measured against the autopilot's gyro: roll 0.0 pitch 0.0 yaw -10.5", 0), 0u);
+  EXPECT_EQ(mount_text(t, 0, 0, -8, 5).rfind("mount measured", 0), 0u) << "2.5 degrees from what is configured";
+  t.mount_yaw_deg = 179;
+  EXPECT_EQ(mount_text(t, 0, 0, -179, 5).rfind("mount measured", 0), 0u) << "2 degrees apart across the wrap";
+}
+
 }  // namespace
 }  // namespace rgbdo

@@ -20,13 +20,14 @@ std::string capture_latency_text(const CaptureTiming& t) {
   if (!t.gyro) return {};
   std::ostringstream s;
   s << std::fixed << std::setprecision(1);
-  if (t.known)
+  if (t.known) {
     s << "capture latency " << t.latency_s * 1e3 << " +- " << t.sigma_s * 1e3 << " ms against the gyro, axes "
       << t.axis_spread_s * 1e3 << " ms apart";
-  if (t.known && t.depth_known)
-    s << ", depth " << t.depth_latency_s * 1e3 << " +- " << t.depth_sigma_s * 1e3 << " ms behind its stamps";
-  else
+    if (t.depth_known)
+      s << ", depth " << t.depth_latency_s * 1e3 << " +- " << t.depth_sigma_s * 1e3 << " ms behind its stamps";
+  } else {
     s << "capture latency not measured yet against the gyro";
+  }
   s << " (applied " << t.applied_s * 1e3 << " ms; " << t.pairs << " pairs, " << t.uncovered << " not covered by the gyro, "
     << t.rejected << " left out as failed fits, " << t.at_rest << " at rest)";
   return s.str();
