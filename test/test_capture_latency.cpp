@@ -20,7 +20,6 @@ namespace rgbdo {
 namespace {
 
 constexpr double kFrameHz = 30, kGyroHz = 50;
-constexpr std::int64_t kSecond = 1'000'000'000;
 
 std::int64_t ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
 
