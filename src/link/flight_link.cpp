@@ -43,8 +43,6 @@ MavlinkOdometryConfig message_config(const Config& c) {
   return m;
 }
 
-std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
-
 std::string seconds_ago(std::int64_t now_ns, std::int64_t then_ns) {
   char text[32];
   std::snprintf(text, sizeof text, "%.1f s", static_cast<double>(now_ns - then_ns) * 1e-9);

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rgbd_odometry/core/camera_mount.hpp"
+#include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
 
@@ -36,11 +37,9 @@ constexpr double kTurningChi2 = 9.0;
 constexpr double kInitialNoise = 3e-6;
 constexpr double kLeastNoise = 3e-10;
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr int kMountEveryPairs = 10;
+constexpr int kMountEveryPairs = 10;  // the mount fitted again (its cost spread: ~600 integrals)
 // The share of its distance to the estimate the applied latency moves each frame.
-constexpr double kApproachShare = 0.1;  // the mount fitted again (its cost spread: ~600 integrals)
-
-std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
+constexpr double kApproachShare = 0.1;
 
 }  // namespace
 

@@ -3,6 +3,7 @@
 // nanoseconds. Capture times of live frames are mapped onto it (sensor/device_clock.hpp), the
 // link stamps its reports with it, and latency is the difference of two readings of it.
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 
 namespace rgbdo {
@@ -16,5 +17,8 @@ inline std::int64_t steady_now_ns() {
 inline double ms_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
+
+// A duration in seconds (a configuration's) as the clock's integer nanoseconds, rounded.
+inline std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(std::llround(s * 1e9)); }
 
 }  // namespace rgbdo
