@@ -531,10 +531,15 @@ TEST(FlightLinkAutopilot, TheAutopilotsGyroTimesTheFramesLive) {
             << " ms (log " << ardupilot.capture_error_ms << " ms)\n";
   // Each motion stamped when its frames were taken: the log's times against the virtual
   // sensor's nominal capture instants, whatever the machine's load made of the frames' delivery
-  // (the latency itself measured 22-48 ms here, idle and loaded). Against rates stamped 25 ms
+  // (the latency itself measured 22-53 ms here, idle and loaded). Against rates stamped 25 ms
   // late the frames seem taken 25 ms later, as an autopilot fusing them by those stamps needs.
-  EXPECT_NEAR(px4.capture_error_ms, 0, 6);
-  EXPECT_NEAR(ardupilot.capture_error_ms, 25, 6);
+  // Measured: -1.3 and -2.7 ms idle and with both cores hogged, 7.6 inside the whole suite's
+  // parallel run, whose load changes during the run (the estimate averages the frames' delivery
+  // delay over it, the median here is its second half's); +21.3, +21.2 and +22.3 against the late
+  // stamps. The bounds part what is asserted from the stamps unchanged (+22 … +53) and from
+  // the gyro's delay ignored or taken the wrong way.
+  EXPECT_NEAR(px4.capture_error_ms, 0, 10);
+  EXPECT_NEAR(ardupilot.capture_error_ms, 25, 10);
 }
 
 }  // namespace
