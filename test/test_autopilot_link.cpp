@@ -475,11 +475,18 @@ GyroRun live_with_gyro(const std::string& name, const std::vector<std::string>& 
   GyroRun g;
   const ScratchDir scratch_dir = scratch(name);
   const fs::path& dir = scratch_dir.path();
-  ::setenv("RGBDO_VIRTUAL_SENSOR_CLOCK_FILE", (dir / "clock").string().c_str(), 1);
+  // Set once for the process and never changed: the virtual sensor's player threads read it,
+  // and setenv while another thread calls getenv is undefined (ThreadSanitizer crashed on it).
+  static const fs::path clock_file = [] {
+    const fs::path p = fs::temp_directory_path() / ("rgbdo_virtual_clock_" + std::to_string(::getpid()));
+    ::setenv("RGBDO_VIRTUAL_SENSOR_CLOCK_FILE", p.string().c_str(), 1);
+    return p;
+  }();
+  fs::remove(clock_file);  // the sensor writes it anew when it starts playing
   std::vector<std::string> args{"--udp-listen", "0", "--ready-file", (dir / "ready").string(), "--result",
                                 (dir / "result.json").string(), "--idle-exit-ms", "2000", "--max-ms", "120000",
                                 "--gyro-groundtruth", std::string(RGBDO_TEST_DATA_DIR) + "/groundtruth.txt",
-                                "--gyro-clock-file", (dir / "clock").string()};
+                                "--gyro-clock-file", clock_file.string()};
   args.insert(args.end(), autopilot_args.begin(), autopilot_args.end());
   const pid_t sim = start_node(kCheckDir, "autopilot_sim.mjs", args, -1);
   EXPECT_TRUE(wait_for_file(dir / "ready", 30)) << "simulator not ready";
@@ -492,7 +499,6 @@ GyroRun live_with_gyro(const std::string& name, const std::vector<std::string>& 
   const ProgramRun run = run_program("udp://127.0.0.1:" + port, dir / "odometry.csv", name,
                                      [&] { return std::chrono::steady_clock::now() - start > std::chrono::seconds(8); }, 60,
                                      {"link.timesync_rate_hz=20"}, "&loop=3");
-  ::unsetenv("RGBDO_VIRTUAL_SENSOR_CLOCK_FILE");
   EXPECT_EQ(run.rc, 0) << run.output;
   EXPECT_EQ(wait_exit(sim, 60), 0);
   g.output = run.output;
@@ -500,7 +506,7 @@ GyroRun live_with_gyro(const std::string& name, const std::vector<std::string>& 
   std::smatch m;
   if (std::regex_search(g.output, m, std::regex("capture latency (-?[0-9.]+) \\+- [0-9.]+ ms against the gyro")))
     g.latency_ms = std::stod(m[1]);
-  g.capture_error_ms = capture_error_ms(dir / "odometry.csv", dir / "clock", expected_ms);
+  g.capture_error_ms = capture_error_ms(dir / "odometry.csv", clock_file, expected_ms);
   return g;
 }
 
