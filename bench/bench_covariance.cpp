@@ -9,7 +9,7 @@
 
 #include "paper_reproduction.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 
 namespace rgbdo {
 namespace {

@@ -14,7 +14,7 @@
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 namespace rgbdo {
 namespace {

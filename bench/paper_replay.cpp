@@ -1,11 +1,11 @@
 // The straightforward reproduction of the paper (paper_reproduction.hpp) as a whole program
 // over a TUM sequence, PNG decoding included: the other side of the whole-process comparison
-// in bench/README.md (both pinned to one core with taskset).
+// in bench/MEASUREMENTS.md#speed-on-x86-64 (both pinned to one core with taskset).
 //   paper_replay TUM_DIR CONFIG.yaml
 #include <cstdio>
 
 #include "paper_reproduction.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 
 int main(int argc, char** argv) {

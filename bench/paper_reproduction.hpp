@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "straightforward_ransac.hpp"
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/pipeline/frame.hpp"
 
 namespace rgbdo {

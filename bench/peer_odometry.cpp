@@ -1,5 +1,6 @@
 // A second estimate of every pair, made independently of ours, for the consistency check of
-// bench/peer_check.py (bench/README.md): OpenCV's RgbdICPOdometry (opencv_contrib rgbd:
+// bench/peer_check.py (bench/README.md#peer-check-whose-error-it-is): OpenCV's
+// RgbdICPOdometry (opencv_contrib rgbd:
 // dense photometric and point-to-plane alignment, no features) on the same TUM frames, with the
 // same colour/depth association and intrinsics as the program. A diagnostic, not the product.
 //
@@ -13,9 +14,9 @@
 #include <opencv2/rgbd.hpp>
 #include <optional>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 
 namespace {

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/app/config.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/rng.hpp"
 #include "rgbd_odometry/core/status.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"

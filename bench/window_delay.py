@@ -18,7 +18,8 @@ share of that axis's drift the delay explains, and "without the delay" the drift
 it is the stamps' delay, a flight controller told it (PX4 EKF2_EV_DELAY, ArduPilot
 VISO_DELAY_MS) does not see that share. On the Kinect it is not: the rotation about the optical
 axis, which the depth does not enter, reads none; the share is the depth's lag behind the
-colour, reaching the other axes through the fit (bench/README.md).
+colour, reaching the other axes through the fit
+(bench/MEASUREMENTS.md#drift-over-1-s-the-share-that-follows-the-change-of-rate).
 
 Last, per sideways axis, the share of its windows' error that is the other half of the tilt
 rotation's (tx with ry, ty with rx): the slope, the correlation and what is left without it.

@@ -15,6 +15,8 @@ install(FILES deploy/config/tum-fr1.yaml deploy/config/xtion.yaml DESTINATION ${
 install(FILES README.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rgbd-odometry COMPONENT main)
 # The autopilot set-up (PX4, ArduPilot) and the deploy notes, beside the user's guide.
 install(FILES deploy/README.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rgbd-odometry RENAME DEPLOY.md COMPONENT main)
+# The odometry log's format, which every consumer of --log reads.
+install(FILES src/io/LOG_FORMAT.md DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rgbd-odometry COMPONENT main)
 # The virtual sensor, where OpenNI2 looks for drivers: `--source openni://rgbdo-virtual:DIR`.
 install(TARGETS RgbdoVirtualSensor LIBRARY DESTINATION lib/${CMAKE_LIBRARY_ARCHITECTURE}/OpenNI2/Drivers
         COMPONENT virtualsensor)

@@ -79,17 +79,19 @@ install_dependencies() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 }
 
-# build DIR [cmake options...]
+# build DIR [cmake options...]: everything, or with targets="A B" set, only those (a job
+# builds what it runs: the demo's replay needs none of the tests and benchmarks).
 build() {
   local dir=$1
   shift
-  log "building $dir"
+  log "building $dir${targets:+ ($targets)}"
   cmake -S . -B "$dir" -DRGBDO_WERROR=ON "$@" >/dev/null
-  cmake --build "$dir" -j "$jobs"
+  # shellcheck disable=SC2086  # targets: a list of names
+  cmake --build "$dir" -j "$jobs" ${targets:+--target $targets}
 }
 
 run_demo() {
-  build build/release -DCMAKE_BUILD_TYPE=Release
+  targets=rgbd-odometry build build/release -DCMAKE_BUILD_TYPE=Release
   mkdir -p build/demo
   log "replaying the bundled frames (test/data/fr1_xyz, TUM RGB-D fr1_xyz, CC BY 4.0) with an autopilot's gyro made from its ground truth"
   build/release/rgbd-odometry --source tum:test/data/fr1_xyz --config deploy/config/tum-fr1.yaml \
@@ -200,7 +202,7 @@ run_plots() {
   local dir=${1:-test/data/fr1_xyz}
   local name
   name=$(basename "$dir")
-  build build/release -DCMAKE_BUILD_TYPE=Release
+  targets=rgbd-odometry build build/release -DCMAKE_BUILD_TYPE=Release
   mkdir -p build/plots
   log "replaying $dir with the evaluation against its ground truth (allowance 0.3 mm, 0.0015 rad)"
   build/release/rgbd-odometry --source "tum:$dir" --config deploy/config/tum-fr1.yaml -q \
@@ -211,7 +213,7 @@ run_plots() {
 
 run_peer() {
   local dir=${1:-test/data/fr1_xyz}
-  build build/release -DCMAKE_BUILD_TYPE=Release
+  targets="rgbd-odometry peer_odometry" build build/release -DCMAKE_BUILD_TYPE=Release
   mkdir -p build/peer
   log "$dir: our odometry and OpenCV's RgbdICPOdometry, each against the ground truth and each other"
   bench/peer_check.sh "$dir" deploy/config/tum-fr1.yaml build/release/rgbd-odometry \
@@ -221,7 +223,7 @@ run_peer() {
 run_blur() {
   local dir=${1:-test/data/fr1_xyz}
   local exposure=${2:-0.1}
-  build build/release -DCMAKE_BUILD_TYPE=Release
+  targets=rgbd-odometry build build/release -DCMAKE_BUILD_TYPE=Release
   log "$dir: as recorded and blurred over $exposure s, each against the ground truth"
   bench/blur_check.sh "$dir" deploy/config/tum-fr1.yaml build/release/rgbd-odometry "$exposure" \
     "build/blur/$(basename "$dir")"

@@ -1,4 +1,4 @@
-// Compares two odometry logs (shared/docs/odometry-csv.md) pair by pair: same rows, same
+// Compares two odometry logs (src/io/LOG_FORMAT.md) pair by pair: same rows, same
 // statuses and inlier counts, poses and covariances equal within tolerances. Used to check
 // that the armhf build replays the bundled frames as the x86-64 build does.
 //

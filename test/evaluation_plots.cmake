@@ -1,4 +1,4 @@
-# The evaluation bench/README.md's plots are made from, end to end on the bundled frames: the
+# The evaluation the plots of bench/README.md#plots are made from, end to end on the bundled frames: the
 # program writes one CSV row per evaluated pair (39) with NEES values, the summary names the
 # allowance given, and bench/plot_evaluation.py turns the CSV into three PNG figures.
 file(REMOVE_RECURSE ${OUT})

@@ -18,7 +18,7 @@ allowed() {
     eval)     echo "core simd pipeline io eval" ;;
     link)     echo "core link" ;;
     sensor)   echo "core simd pipeline io sensor" ;;
-    runtime)  echo "core simd pipeline io sensor runtime" ;;
+    runtime)  echo "core simd pipeline io runtime" ;;
     app)      echo "core simd pipeline io eval link sensor runtime app" ;;
   esac
 }
@@ -32,13 +32,15 @@ forbidden() {
     io)       echo "$devices|$threads_and_wires" ;;
     eval)     echo "$devices|$threads_and_wires" ;;
     link)     echo "opencv2|$devices" ;;
+    runtime)  echo "$devices" ;;
     *)        echo '^$' ;;
   esac
 }
 
 checked=0
 for layer in core simd pipeline io eval link sensor runtime app; do
-  files=$(ls "$repo/src/$layer"/*.cpp "$repo/src/$layer"/*.hpp "$repo/include/rgbd_odometry/$layer"/*.hpp 2>/dev/null)
+  # Every file below the layer's folders, sub-folders too (src/sensor/virtual_sensor/).
+  files=$(find "$repo/src/$layer" "$repo/include/rgbd_odometry/$layer" \( -name '*.cpp' -o -name '*.hpp' \) 2>/dev/null)
   [ "$layer" = simd ] && files="$files $(find "$repo/simd" -name '*.cpp' -o -name '*.hpp')"
   for f in $files; do
     checked=$((checked + 1))

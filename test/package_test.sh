@@ -34,6 +34,7 @@ expect_file usr/lib/sysusers.d/rgbd-odometry.conf 644
 expect_file usr/share/rgbd-odometry/config/tum-fr1.yaml 644
 expect_file usr/share/doc/rgbd-odometry/README.md 644
 expect_file usr/share/doc/rgbd-odometry/DEPLOY.md 644
+expect_file usr/share/doc/rgbd-odometry/LOG_FORMAT.md 644
 # The virtual sensor is a test tool: its own package, not the vehicle's.
 [ -z "$(find "$root" -name 'libRgbdoVirtualSensor*')" ] || fail "the vehicle's package carries the virtual sensor"
 dpkg-deb -f "$deb" Depends | grep -q libopenni2-0 || fail "Depends lacks the OpenNI2 runtime"

@@ -17,7 +17,7 @@
 #include <cmath>
 #include <vector>
 
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 
 namespace rgbdo::oracle {
 

@@ -4,7 +4,8 @@
 # memory does not grow after warm-up by more than MAX_GROWTH_MB, no descriptor or thread is
 # leaked, the same frame pairs give the same motions pass after pass (nothing drifts), and
 # (in a sanitised build) nothing leaks or errs.
-# The 100,000-frame version of bench/README.md's long run is the same command with loop=2500.
+# The 100,000-frame version of the long run (bench/MEASUREMENTS.md#long-runs-soak) is the
+# same command with loop=2500.
 string(REPLACE "|" ";" EMULATOR "${EMULATOR}")
 file(REMOVE ${LOG} ${LOG}.1)
 execute_process(

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 namespace rgbdo {
 namespace {

@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/core/camera_mount.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/pipeline/capture_latency.hpp"

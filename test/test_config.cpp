@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rgbd_odometry/core/config.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 namespace rgbdo {
 namespace {
@@ -44,7 +44,8 @@ TEST(Config, DefaultsAreThePapersTable1) {
   EXPECT_EQ(c.ransac.max_iterations, 200);
   EXPECT_EQ(c.covariance.perturbations, 100);
   EXPECT_DOUBLE_EQ(c.covariance.depth_noise_coeff, 1.425e-3);
-  // No factor fitted to a recording: the noise model as it stands (src/pipeline/README.md).
+  // No factor fitted to a recording: the noise model as it stands
+  // (src/pipeline/README.md#noise-model-and-covariance).
   EXPECT_EQ(c.covariance.model, "physical");
   EXPECT_DOUBLE_EQ(c.covariance.scale, 1.0);
   EXPECT_NO_THROW(validate(c));

@@ -8,7 +8,7 @@
 #include "perturb_reference.hpp"
 #include "runnable_kernel_sets.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
 #include "rgbd_odometry/pipeline/stamp_jitter.hpp"
 

@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"

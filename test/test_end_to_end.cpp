@@ -12,7 +12,7 @@
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/core/time_format.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 namespace rgbdo {
 namespace {

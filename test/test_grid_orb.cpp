@@ -11,7 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/detect.hpp"
 #include "rgbd_odometry/pipeline/grid_orb.hpp"

@@ -13,12 +13,12 @@
 
 #include "rgbd_odometry/simd/kernels.hpp"
 #include "runnable_kernel_sets.hpp"
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 namespace rgbdo {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/rng.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"

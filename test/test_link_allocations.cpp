@@ -24,7 +24,7 @@
 #include <gtest/gtest.h>
 
 #include "loopback_udp.hpp"
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/link/flight_link.hpp"
 #include "rgbd_odometry/link/transport.hpp"
 #include "pty_test_env.hpp"
@@ -90,7 +90,7 @@ TEST(LinkAllocations, ReceiverAnsweringAFloodAllocatesNothing) {
   const int peer = autopilot.fd;
   Config config;
   config.link.uri = "udp://127.0.0.1:" + std::to_string(autopilot.port);
-  FlightLink flight(config);
+  FlightLink flight(config.link, config.body);
   flight.tick(0);  // the heartbeat tells us the link's source address
   sockaddr_in from{};
   socklen_t from_length = sizeof from;

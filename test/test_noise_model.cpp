@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/rng.hpp"
 #include "rgbd_odometry/pipeline/stamp_jitter.hpp"
 

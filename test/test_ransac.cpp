@@ -252,7 +252,7 @@ TEST(Ransac, FewerPairsThanMinimumFails) {
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "ransac_oracle.hpp"
 #include "runnable_kernel_sets.hpp"
 

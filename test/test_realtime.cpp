@@ -15,7 +15,7 @@
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "recorded_frame_of.hpp"
 
 namespace rgbdo {
@@ -72,7 +72,8 @@ LiveRun run_live(const Config& config, const std::string& uri,
   o.uri = uri;
   o.frame_timeout_ms = config.sensor.frame_timeout_ms;
   o.pairing_wait_ms = config.sensor.pairing_wait_ms;
-  OpenNiFeed feed(o, 0);
+  // The feed the program opens for openni://: the device with its re-open policy.
+  ReconnectingFeed feed(std::make_unique<OpenNiFeed>(o, 0), config.sensor);
   LiveRun run;
   std::atomic<bool> stop{false};
   const auto start = std::chrono::steady_clock::now();
@@ -86,7 +87,7 @@ LiveRun run_live(const Config& config, const std::string& uri,
     }
   };
   RealtimePipeline pipeline(
-      config, feed,
+      config, config.runtime, feed,
       [&](const PairOutput& out) {
         run.outputs.push_back(out);
         check_stop();

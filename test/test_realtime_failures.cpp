@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/runtime/realtime.hpp"
 #include "rgbd_odometry/sensor/frame_feed.hpp"
 
@@ -23,7 +23,7 @@ class FaultyFeed final : public FrameFeed {
  public:
   enum class Fault { Throw, WrongTypes };
   FaultyFeed(const Config& config, int at, Fault fault)
-      : inner_(open_frame_feed(std::string("tum:") + RGBDO_TEST_DATA_DIR, config, 0)), at_(at), fault_(fault) {}
+      : inner_(open_frame_feed(std::string("tum:") + RGBDO_TEST_DATA_DIR, config, config.sensor, 0)), at_(at), fault_(fault) {}
   FeedState next(RgbdFrame& frame, std::string& problem) override {
     const FeedState state = inner_->next(frame, problem);
     if (state == FeedState::Frame && read_++ == at_) {
@@ -55,7 +55,7 @@ TEST(RealtimeFailures, AThrowingSourceStopsTheRunWithItsNameAndKeepsWhatCameBefo
     const Config config = config_with_threads(threads);
     FaultyFeed feed(config, 12, FaultyFeed::Fault::Throw);
     std::vector<PairOutput> outputs;
-    RealtimePipeline pipeline(config, feed, [&](const PairOutput& o) { outputs.push_back(o); }, [](const std::string&) {});
+    RealtimePipeline pipeline(config, config.runtime, feed, [&](const PairOutput& o) { outputs.push_back(o); }, [](const std::string&) {});
     const std::atomic<bool> never{false};
     const RealtimeStats stats = pipeline.run(never);
     EXPECT_EQ(stats.failure, "capture thread: the source broke at frame 12") << threads << " processing threads";
@@ -74,7 +74,7 @@ TEST(RealtimeFailures, AThrowingOutputStopsTheRunInsteadOfTheProcess) {
   FaultyFeed feed(config, 1000, FaultyFeed::Fault::Throw);  // no fault from the source
   int seen = 0;
   RealtimePipeline pipeline(
-      config, feed,
+      config, config.runtime, feed,
       [&](const PairOutput&) {
         if (++seen == 5) throw std::runtime_error("the log's disk is gone");
       },
@@ -89,7 +89,7 @@ TEST(RealtimeFailures, AFrameOfTheWrongTypesIsFlaggedAndTrackingResumes) {
   const Config config = config_with_threads(2);
   FaultyFeed feed(config, 7, FaultyFeed::Fault::WrongTypes);
   std::vector<PairOutput> outputs;
-  RealtimePipeline pipeline(config, feed, [&](const PairOutput& o) { outputs.push_back(o); }, [](const std::string&) {});
+  RealtimePipeline pipeline(config, config.runtime, feed, [&](const PairOutput& o) { outputs.push_back(o); }, [](const std::string&) {});
   const std::atomic<bool> never{false};
   const RealtimeStats stats = pipeline.run(never);
   EXPECT_EQ(stats.failure, "");

@@ -17,7 +17,7 @@
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/sensor/sensor_openni.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "recorded_frame_of.hpp"
 
 namespace rgbdo {
@@ -175,7 +175,7 @@ TEST(OpenNiSource, ARecordingPlaysBackThroughOniFile) {
     // AND its depth is a recorded depth frame, bit for bit (the 16z codec is lossless), within
     // 20 ms. Not always the one the live run paired: OpenNI2's Recorder starts every stream's
     // clock at zero, so a recording keeps each stream's intervals but not the offset between
-    // colour and depth (deploy/README.md, live sensor); TUM's Kinect had no frame sync.
+    // colour and depth (deploy/README.md#live-sensor); TUM's Kinect had no frame sync.
     ASSERT_EQ(played[i].status, Status::Ok) << "frame " << i << ": " << played[i].problem;
     EXPECT_LE(std::llabs(played[i].t_depth_ns - played[i].t_colour_ns), 20'000'000) << "frame " << i;
     bool recorded = false;

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "rgbd_odometry/core/rng.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/track.hpp"

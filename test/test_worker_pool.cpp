@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/grid_orb.hpp"
 #include "rgbd_odometry/pipeline/mask.hpp"

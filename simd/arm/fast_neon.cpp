@@ -4,7 +4,7 @@
 // of brighter and of darker circle pixels, a corner being a run of 9 (the same booleans as the
 // reference's bit test). The score gathers one corner's circle into a vector by lane loads and
 // sums its saturated excesses: under half the reference's instructions per corner (5.5 -> ~2.5
-// M a frame on the bundled frames, bench/README.md).
+// M a frame on the bundled frames, bench/MEASUREMENTS.md#arm-cost-model).
 #include <arm_neon.h>
 
 #include <algorithm>

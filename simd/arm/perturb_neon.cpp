@@ -14,89 +14,54 @@ struct Half {  // xoshiro128+ state of 4 lanes
   uint32x4_t s[4];
 };
 
-inline uint32x4_t next(Half& st) {
-  const uint32x4_t result = vaddq_u32(st.s[0], st.s[3]);
-  const uint32x4_t t = vshlq_n_u32(st.s[1], 9);
-  st.s[2] = veorq_u32(st.s[2], st.s[0]);
-  st.s[3] = veorq_u32(st.s[3], st.s[1]);
-  st.s[1] = veorq_u32(st.s[1], st.s[2]);
-  st.s[0] = veorq_u32(st.s[0], st.s[3]);
-  st.s[2] = veorq_u32(st.s[2], t);
-  st.s[3] = vorrq_u32(vshlq_n_u32(st.s[3], 11), vshrq_n_u32(st.s[3], 21));
-  return result;
-}
+// The reference's lane operations on a q register (perturb_reference.hpp). ARMv7 NEON has no
+// vector divide or square root: the reciprocal (square-root) estimate and two Newton-Raphson steps.
+struct NeonOps {
+  using F = float32x4_t;
+  using U = uint32x4_t;
+  using M = uint32x4_t;
+  static F set(float v) { return vdupq_n_f32(v); }
+  static F add(F a, F b) { return vaddq_f32(a, b); }
+  static F sub(F a, F b) { return vsubq_f32(a, b); }
+  static F mul(F a, F b) { return vmulq_f32(a, b); }
+  static F div(F a, F b) {
+    float32x4_t r = vrecpeq_f32(b);
+    r = vmulq_f32(r, vrecpsq_f32(b, r));
+    r = vmulq_f32(r, vrecpsq_f32(b, r));
+    return vmulq_f32(a, r);
+  }
+  // x >= 0; x = 0 would give 0 * inf = NaN through the estimate, so it is selected out.
+  static F sqrt(F x) {
+    float32x4_t r = vrsqrteq_f32(x);
+    r = vmulq_f32(r, vrsqrtsq_f32(vmulq_f32(x, r), r));
+    r = vmulq_f32(r, vrsqrtsq_f32(vmulq_f32(x, r), r));
+    return vbslq_f32(neon::greater(x, vdupq_n_f32(0.0f)), vmulq_f32(x, r), vdupq_n_f32(0.0f));
+  }
+  static M greater(F a, F b) { return neon::greater(a, b); }
+  static M less(F a, F b) { return neon::less(a, b); }
+  static M either(M a, M b) { return vorrq_u32(a, b); }
+  static F select(M m, F where_true, F where_false) { return vbslq_f32(m, where_true, where_false); }
+  static F unit(U x) {
+    return vmulq_f32(vaddq_f32(vcvtq_f32_u32(vshrq_n_u32(x, 9)), vdupq_n_f32(0.5f)), vdupq_n_f32(0x1.0p-23f));
+  }
+  static U add_u(U a, U b) { return vaddq_u32(a, b); }
+  static U xor_u(U a, U b) { return veorq_u32(a, b); }
+  static U or_u(U a, U b) { return vorrq_u32(a, b); }
+  template <int N>
+  static U shift_left(U x) { return vshlq_n_u32(x, N); }
+  template <int N>
+  static U shift_right(U x) { return vshrq_n_u32(x, N); }
+  static void split(F u, F& exponent, F& mantissa) {
+    const uint32x4_t bits = vreinterpretq_u32_f32(u);
+    exponent = vcvtq_f32_s32(vsubq_s32(vreinterpretq_s32_u32(vshrq_n_u32(bits, 23)), vdupq_n_s32(127)));
+    mantissa = vreinterpretq_f32_u32(vorrq_u32(vandq_u32(bits, vdupq_n_u32(0x007FFFFF)), vdupq_n_u32(0x3F800000)));
+  }
+};
 
-inline float32x4_t divide(float32x4_t a, float32x4_t b) {
-  float32x4_t r = vrecpeq_f32(b);
-  r = vmulq_f32(r, vrecpsq_f32(b, r));
-  r = vmulq_f32(r, vrecpsq_f32(b, r));
-  return vmulq_f32(a, r);
-}
-
-// x >= 0; x = 0 would give 0 * inf = NaN through the estimate, so it is selected out.
-inline float32x4_t sqrt_non_negative(float32x4_t x) {
-  float32x4_t r = vrsqrteq_f32(x);
-  r = vmulq_f32(r, vrsqrtsq_f32(vmulq_f32(x, r), r));
-  r = vmulq_f32(r, vrsqrtsq_f32(vmulq_f32(x, r), r));
-  return vbslq_f32(neon::greater(x, vdupq_n_f32(0.0f)), vmulq_f32(x, r), vdupq_n_f32(0.0f));
-}
-
-inline float32x4_t to_unit(uint32x4_t x) {
-  return vmulq_f32(vaddq_f32(vcvtq_f32_u32(vshrq_n_u32(x, 9)), vdupq_n_f32(0.5f)), vdupq_n_f32(0x1.0p-23f));
-}
-
-// One Horner step, c + x2 * acc, in the reference's operation order.
-inline float32x4_t poly(float32x4_t x2, float32x4_t acc, float c) { return vaddq_f32(vdupq_n_f32(c), vmulq_f32(x2, acc)); }
-
-inline float32x4_t log_unit(float32x4_t u) {
-  const uint32x4_t bits = vreinterpretq_u32_f32(u);
-  float32x4_t e = vcvtq_f32_s32(vsubq_s32(vreinterpretq_s32_u32(vshrq_n_u32(bits, 23)), vdupq_n_s32(127)));
-  float32x4_t m = vreinterpretq_f32_u32(vorrq_u32(vandq_u32(bits, vdupq_n_u32(0x007FFFFF)), vdupq_n_u32(0x3F800000)));
-  const uint32x4_t fold = neon::greater(m, vdupq_n_f32(1.41421356f));
-  m = vbslq_f32(fold, vmulq_f32(m, vdupq_n_f32(0.5f)), m);
-  e = vbslq_f32(fold, vaddq_f32(e, vdupq_n_f32(1.0f)), e);
-  const float32x4_t one = vdupq_n_f32(1.0f);
-  const float32x4_t s = divide(vsubq_f32(m, one), vaddq_f32(m, one));
-  const float32x4_t s2 = vmulq_f32(s, s);
-  float32x4_t series = vdupq_n_f32(0.111111111f);
-  series = poly(s2, series, 0.142857143f);
-  series = poly(s2, series, 0.2f);
-  series = poly(s2, series, 0.333333333f);
-  series = poly(s2, series, 1.0f);
-  return vaddq_f32(vmulq_f32(e, vdupq_n_f32(0.693147181f)), vmulq_f32(vmulq_f32(vdupq_n_f32(2.0f), s), series));
-}
-
-inline void sincos_turns(float32x4_t t, float32x4_t& sin_out, float32x4_t& cos_out) {
-  const uint32x4_t upper = neon::greater(t, vdupq_n_f32(0.25f));
-  const uint32x4_t lower = neon::less(t, vdupq_n_f32(-0.25f));
-  const float32x4_t sign = vbslq_f32(vorrq_u32(upper, lower), vdupq_n_f32(-1.0f), vdupq_n_f32(1.0f));
-  t = vbslq_f32(upper, vsubq_f32(vdupq_n_f32(0.5f), t), t);
-  t = vbslq_f32(lower, vsubq_f32(vdupq_n_f32(-0.5f), t), t);
-  const float32x4_t x = vmulq_f32(t, vdupq_n_f32(6.28318531f));
-  const float32x4_t x2 = vmulq_f32(x, x);
-  float32x4_t sp = vdupq_n_f32(-2.50521084e-8f);
-  sp = poly(x2, sp, 2.75573192e-6f);
-  sp = poly(x2, sp, -1.98412698e-4f);
-  sp = poly(x2, sp, 8.33333333e-3f);
-  sp = poly(x2, sp, -1.66666667e-1f);
-  sp = poly(x2, sp, 1.0f);
-  sin_out = vmulq_f32(x, sp);
-  float32x4_t cp = vdupq_n_f32(2.08767570e-9f);
-  cp = poly(x2, cp, -2.75573192e-7f);
-  cp = poly(x2, cp, 2.48015873e-5f);
-  cp = poly(x2, cp, -1.38888889e-3f);
-  cp = poly(x2, cp, 4.16666667e-2f);
-  cp = poly(x2, cp, -0.5f);
-  cp = poly(x2, cp, 1.0f);
-  cos_out = vmulq_f32(sign, cp);
-}
+inline uint32x4_t next(Half& st) { return reference::next_of<NeonOps>(st.s); }
 
 inline void box_muller(uint32x4_t a, uint32x4_t b, float32x4_t& z0, float32x4_t& z1) {
-  const float32x4_t r = sqrt_non_negative(vmulq_f32(vdupq_n_f32(-2.0f), log_unit(to_unit(a))));
-  float32x4_t s, c;
-  sincos_turns(vsubq_f32(to_unit(b), vdupq_n_f32(0.5f)), s, c);
-  z0 = vmulq_f32(r, c);
-  z1 = vmulq_f32(r, s);
+  reference::box_muller_of<NeonOps>(a, b, z0, z1);
 }
 
 inline float32x4_t add_mul(float base, float sigma, float32x4_t n) {

@@ -12,77 +12,44 @@ struct Lanes {
   __m256i s[4];
 };
 
-inline __m256i next(Lanes& st) {  // xoshiro128+ in 8 lanes
-  const __m256i result = _mm256_add_epi32(st.s[0], st.s[3]);
-  const __m256i t = _mm256_slli_epi32(st.s[1], 9);
-  st.s[2] = _mm256_xor_si256(st.s[2], st.s[0]);
-  st.s[3] = _mm256_xor_si256(st.s[3], st.s[1]);
-  st.s[1] = _mm256_xor_si256(st.s[1], st.s[2]);
-  st.s[0] = _mm256_xor_si256(st.s[0], st.s[3]);
-  st.s[2] = _mm256_xor_si256(st.s[2], t);
-  st.s[3] = _mm256_or_si256(_mm256_slli_epi32(st.s[3], 11), _mm256_srli_epi32(st.s[3], 21));
-  return result;
-}
+// The reference's lane operations on a ymm register (perturb_reference.hpp).
+struct Avx2Ops {
+  using F = __m256;
+  using U = __m256i;
+  using M = __m256;
+  static F set(float v) { return _mm256_set1_ps(v); }
+  static F add(F a, F b) { return _mm256_add_ps(a, b); }
+  static F sub(F a, F b) { return _mm256_sub_ps(a, b); }
+  static F mul(F a, F b) { return _mm256_mul_ps(a, b); }
+  static F div(F a, F b) { return _mm256_div_ps(a, b); }
+  static F sqrt(F x) { return _mm256_sqrt_ps(x); }
+  static M greater(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+  static M less(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
+  static M either(M a, M b) { return _mm256_or_ps(a, b); }
+  static F select(M m, F where_true, F where_false) { return _mm256_blendv_ps(where_false, where_true, m); }
+  static F unit(U x) {
+    return _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(x, 9)), _mm256_set1_ps(0.5f)),
+                         _mm256_set1_ps(0x1.0p-23f));
+  }
+  static U add_u(U a, U b) { return _mm256_add_epi32(a, b); }
+  static U xor_u(U a, U b) { return _mm256_xor_si256(a, b); }
+  static U or_u(U a, U b) { return _mm256_or_si256(a, b); }
+  template <int N>
+  static U shift_left(U x) { return _mm256_slli_epi32(x, N); }
+  template <int N>
+  static U shift_right(U x) { return _mm256_srli_epi32(x, N); }
+  static void split(F u, F& exponent, F& mantissa) {
+    const __m256i bits = _mm256_castps_si256(u);
+    exponent = _mm256_cvtepi32_ps(_mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127)));
+    mantissa = _mm256_castsi256_ps(
+        _mm256_or_si256(_mm256_and_si256(bits, _mm256_set1_epi32(0x007FFFFF)), _mm256_set1_epi32(0x3F800000)));
+  }
+};
 
-inline __m256 to_unit(__m256i x) {
-  return _mm256_mul_ps(_mm256_add_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(x, 9)), _mm256_set1_ps(0.5f)),
-                       _mm256_set1_ps(0x1.0p-23f));
-}
-
-// One Horner step, c + x2 * acc, in the reference's operation order.
-inline __m256 poly(__m256 x2, __m256 acc, float c) { return _mm256_add_ps(_mm256_set1_ps(c), _mm256_mul_ps(x2, acc)); }
-
-inline __m256 log_unit(__m256 u) {
-  const __m256i bits = _mm256_castps_si256(u);
-  __m256 e = _mm256_cvtepi32_ps(_mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127)));
-  __m256 m = _mm256_castsi256_ps(_mm256_or_si256(_mm256_and_si256(bits, _mm256_set1_epi32(0x007FFFFF)),
-                                                 _mm256_set1_epi32(0x3F800000)));
-  const __m256 fold = _mm256_cmp_ps(m, _mm256_set1_ps(1.41421356f), _CMP_GT_OQ);
-  m = _mm256_blendv_ps(m, _mm256_mul_ps(m, _mm256_set1_ps(0.5f)), fold);
-  e = _mm256_blendv_ps(e, _mm256_add_ps(e, _mm256_set1_ps(1.0f)), fold);
-  const __m256 one = _mm256_set1_ps(1.0f);
-  const __m256 s = _mm256_div_ps(_mm256_sub_ps(m, one), _mm256_add_ps(m, one));
-  const __m256 s2 = _mm256_mul_ps(s, s);
-  __m256 series = _mm256_set1_ps(0.111111111f);
-  series = poly(s2, series, 0.142857143f);
-  series = poly(s2, series, 0.2f);
-  series = poly(s2, series, 0.333333333f);
-  series = poly(s2, series, 1.0f);
-  return _mm256_add_ps(_mm256_mul_ps(e, _mm256_set1_ps(0.693147181f)),
-                       _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(2.0f), s), series));
-}
-
-inline void sincos_turns(__m256 t, __m256& sin_out, __m256& cos_out) {
-  const __m256 upper = _mm256_cmp_ps(t, _mm256_set1_ps(0.25f), _CMP_GT_OQ);
-  const __m256 lower = _mm256_cmp_ps(t, _mm256_set1_ps(-0.25f), _CMP_LT_OQ);
-  const __m256 sign = _mm256_blendv_ps(_mm256_set1_ps(1.0f), _mm256_set1_ps(-1.0f), _mm256_or_ps(upper, lower));
-  t = _mm256_blendv_ps(t, _mm256_sub_ps(_mm256_set1_ps(0.5f), t), upper);
-  t = _mm256_blendv_ps(t, _mm256_sub_ps(_mm256_set1_ps(-0.5f), t), lower);
-  const __m256 x = _mm256_mul_ps(t, _mm256_set1_ps(6.28318531f));
-  const __m256 x2 = _mm256_mul_ps(x, x);
-  __m256 sp = _mm256_set1_ps(-2.50521084e-8f);
-  sp = poly(x2, sp, 2.75573192e-6f);
-  sp = poly(x2, sp, -1.98412698e-4f);
-  sp = poly(x2, sp, 8.33333333e-3f);
-  sp = poly(x2, sp, -1.66666667e-1f);
-  sp = poly(x2, sp, 1.0f);
-  sin_out = _mm256_mul_ps(x, sp);
-  __m256 cp = _mm256_set1_ps(2.08767570e-9f);
-  cp = poly(x2, cp, -2.75573192e-7f);
-  cp = poly(x2, cp, 2.48015873e-5f);
-  cp = poly(x2, cp, -1.38888889e-3f);
-  cp = poly(x2, cp, 4.16666667e-2f);
-  cp = poly(x2, cp, -0.5f);
-  cp = poly(x2, cp, 1.0f);
-  cos_out = _mm256_mul_ps(sign, cp);
-}
+inline __m256i next(Lanes& st) { return reference::next_of<Avx2Ops>(st.s); }  // xoshiro128+ in 8 lanes
 
 inline void box_muller(__m256i a, __m256i b, __m256& z0, __m256& z1) {
-  const __m256 r = _mm256_sqrt_ps(_mm256_mul_ps(_mm256_set1_ps(-2.0f), log_unit(to_unit(a))));
-  __m256 s, c;
-  sincos_turns(_mm256_sub_ps(to_unit(b), _mm256_set1_ps(0.5f)), s, c);
-  z0 = _mm256_mul_ps(r, c);
-  z1 = _mm256_mul_ps(r, s);
+  reference::box_muller_of<Avx2Ops>(a, b, z0, z1);
 }
 
 inline __m256 add_mul(float base, float sigma, __m256 n) {

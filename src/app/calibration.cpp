@@ -5,7 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 namespace rgbdo {
 namespace {

@@ -3,17 +3,18 @@
 #include <csignal>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "rgbd_odometry/simd/kernels.hpp"
 #include "rgbd_odometry/app/list_devices.hpp"
 #include "rgbd_odometry/app/run.hpp"
 #include "rgbd_odometry/core/version.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
-int main(int argc, char** argv) {
-  rgbdo::RunOptions options;
-  CLI::App app{"rgbd-odometry: frame-to-frame RGB-D odometry with a 6x6 covariance per pair"};
-  app.set_version_flag("--version", std::string("rgbd-odometry ") + rgbdo::kVersion);
+namespace {
+
+// The flags that print something about the build or the machine, then exit.
+void add_exit_flags(CLI::App& app) {
   app.add_flag_callback(
       "--print-kernels",
       [] {
@@ -40,10 +41,25 @@ int main(int argc, char** argv) {
         throw CLI::Success();
       },
       "print the configuration reference (every key, default, unit, range, help) as Markdown, then exit");
-  bool print_config = false;
-  app.add_flag("--print-config", print_config,
-               "print the whole effective configuration (--config, then --set) as a commented YAML file that "
-               "--config reads back, then exit");
+}
+
+// Options that stand for --set KEY=VALUE.
+struct Shorthands {
+  std::string detector, seed, max_features, scale;
+
+  void add_to(std::vector<std::string>& overrides) const {
+    if (!detector.empty()) {
+      overrides.push_back("features.detector=" + detector);
+      overrides.push_back("features.descriptor=" + detector);
+    }
+    if (!max_features.empty()) overrides.push_back("features.max_features=" + max_features);
+    if (!scale.empty()) overrides.push_back("covariance.scale=" + scale);
+    if (!seed.empty()) overrides.push_back("seed=" + seed);
+  }
+};
+
+// The options of a run.
+void add_run_options(CLI::App& app, rgbdo::RunOptions& options, Shorthands& shorthands) {
   app.add_option("--source", options.source,
                  "frame source: tum:DIR (a TUM RGB-D sequence), openni://[DEVICE-URI] (a live sensor, the first "
                  "found when empty) or oni:FILE.oni (an OpenNI2 recording)");
@@ -51,11 +67,10 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--set", options.overrides, "override a configuration key: --set ransac.max_iterations=300")
       ->type_name("KEY=VALUE");
-  std::string detector, seed, max_features, scale;
-  app.add_option("--detector", detector, "shorthand for --set features.detector=NAME --set features.descriptor=NAME");
-  app.add_option("--max-features", max_features, "shorthand for --set features.max_features=N");
-  app.add_option("--covariance-scale", scale, "shorthand for --set covariance.scale=S");
-  app.add_option("--seed", seed, "shorthand for --set seed=N");
+  app.add_option("--detector", shorthands.detector, "shorthand for --set features.detector=NAME --set features.descriptor=NAME");
+  app.add_option("--max-features", shorthands.max_features, "shorthand for --set features.max_features=N");
+  app.add_option("--covariance-scale", shorthands.scale, "shorthand for --set covariance.scale=S");
+  app.add_option("--seed", shorthands.seed, "shorthand for --set seed=N");
   app.add_option("--log", options.log_path, "write the odometry CSV log here");
   app.add_option("--link", options.link,
                  "send MAVLink 2 odometry to the flight computer: udp://HOST:PORT or serial:///dev/ttyX[:BAUD] "
@@ -79,6 +94,21 @@ int main(int argc, char** argv) {
                "start the trajectory at the first frame's ground-truth pose");
   app.add_flag("-q,--quiet", options.quiet, "no per-pair lines, only the summary");
   app.add_flag("-v,--verbose", options.verbose, "per-pair stage times and counts");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  rgbdo::RunOptions options;
+  CLI::App app{"rgbd-odometry: frame-to-frame RGB-D odometry with a 6x6 covariance per pair"};
+  app.set_version_flag("--version", std::string("rgbd-odometry ") + rgbdo::kVersion);
+  add_exit_flags(app);
+  bool print_config = false;
+  app.add_flag("--print-config", print_config,
+               "print the whole effective configuration (--config, then --set) as a commented YAML file that "
+               "--config reads back, then exit");
+  Shorthands shorthands;
+  add_run_options(app, options, shorthands);
   CLI11_PARSE(app, argc, argv);
   // A kernel set forced by the environment that cannot run here is a usage error, not a
   // silent fallback: the user asked to measure or test that set.
@@ -86,14 +116,7 @@ int main(int argc, char** argv) {
     std::cerr << "rgbd-odometry: " << problem << "\n";
     return 2;
   }
-
-  if (!detector.empty()) {
-    options.overrides.push_back("features.detector=" + detector);
-    options.overrides.push_back("features.descriptor=" + detector);
-  }
-  if (!max_features.empty()) options.overrides.push_back("features.max_features=" + max_features);
-  if (!scale.empty()) options.overrides.push_back("covariance.scale=" + scale);
-  if (!seed.empty()) options.overrides.push_back("seed=" + seed);
+  shorthands.add_to(options.overrides);
   if (print_config) return rgbdo::print_configuration(options, std::cout, std::cerr);
   if (options.source.empty()) {
     std::cerr << "rgbd-odometry: --source is required (or --print-config, --print-kernels, --list-devices)\n";

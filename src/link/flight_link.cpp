@@ -33,13 +33,13 @@ constexpr std::int64_t kAttitudeFreshNs = 500'000'000;
 // an answer never waits for a busy core (measured: up to 7 ms on an idle 2-core x86 without).
 constexpr int kReceiverPriority = 10;
 
-MavlinkOdometryConfig message_config(const Config& c) {
+MavlinkOdometryConfig message_config(const LinkConfig& c, const BodyConfig& body) {
   MavlinkOdometryConfig m;
-  m.extrinsic = extrinsic_from(c.body);
-  m.quality_sigma_fail_m = c.link.quality_sigma_fail_m;
-  m.velocity_error_min_mps = c.link.velocity_error_min_mps;
-  m.velocity_error_max_mps = c.link.velocity_error_max_mps;
-  m.delta_min_interval_s = c.link.delta_min_interval_ms * 1e-3;
+  m.extrinsic = extrinsic_from(body);
+  m.quality_sigma_fail_m = c.quality_sigma_fail_m;
+  m.velocity_error_min_mps = c.velocity_error_min_mps;
+  m.velocity_error_max_mps = c.velocity_error_max_mps;
+  m.delta_min_interval_s = c.delta_min_interval_ms * 1e-3;
   return m;
 }
 
@@ -81,15 +81,15 @@ std::string describe(const GeoPoint& origin) {
 
 }  // namespace
 
-FlightLink::FlightLink(const Config& config)
-    : config_(config.link), options_(parse_link_uri(config.link.uri)), link_(open_link(options_)),
-      builder_(message_config(config)),
-      timesync_period_ns_(config.link.timesync_rate_hz > 0 ? seconds_to_ns(1.0 / config.link.timesync_rate_hz) : 0),
-      origin_(parse_ekf_origin(config.link.ekf_origin)),
-      framer_(static_cast<std::uint8_t>(config.link.system_id), mavlink::kMavCompIdVisualInertialOdometry),
-      watch_(static_cast<std::uint8_t>(config.link.autopilot_system_id), static_cast<std::uint8_t>(config.link.system_id),
-             mavlink::kMavCompIdVisualInertialOdometry, seconds_to_ns(config.link.autopilot_timeout_s)),
-      timesync_(seconds_to_ns(config.link.timesync_max_rtt_ms * 1e-3)),
+FlightLink::FlightLink(const LinkConfig& config, const BodyConfig& body)
+    : config_(config), options_(parse_link_uri(config.uri)), link_(open_link(options_)),
+      builder_(message_config(config, body)),
+      timesync_period_ns_(config.timesync_rate_hz > 0 ? seconds_to_ns(1.0 / config.timesync_rate_hz) : 0),
+      origin_(parse_ekf_origin(config.ekf_origin)),
+      framer_(static_cast<std::uint8_t>(config.system_id), mavlink::kMavCompIdVisualInertialOdometry),
+      watch_(static_cast<std::uint8_t>(config.autopilot_system_id), static_cast<std::uint8_t>(config.system_id),
+             mavlink::kMavCompIdVisualInertialOdometry, seconds_to_ns(config.autopilot_timeout_s)),
+      timesync_(seconds_to_ns(config.timesync_max_rtt_ms * 1e-3)),
       receive_buffer_(kMaxDatagramBytes) {
   problems_seen_ = link_->stats().problem_reports;  // what is wrong at start is in startup_report()
   // Serial sends TIMESYNC answers ahead of queued frames: number every frame as it leaves, so

@@ -105,6 +105,28 @@ struct UdpCounters {
     s.peer_changes = peer_changes.load(std::memory_order_relaxed);
     return s;
   }
+
+  // What one datagram's send() or sendto() (returning n) came to, counted and reported.
+  SendResult count_send(ssize_t n, std::size_t size, LinkProblem& problem) {
+    if (n == static_cast<ssize_t>(size)) {
+      sent.fetch_add(1, std::memory_order_relaxed);
+      bytes.fetch_add(size, std::memory_order_relaxed);
+      up.store(true, std::memory_order_relaxed);
+      return SendResult::Sent;
+    }
+    const int err = n < 0 ? errno : EMSGSIZE;  // a datagram goes whole or not at all
+    if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
+      dropped_queue_full.fetch_add(1, std::memory_order_relaxed);
+      problem.report("socket send buffer full, frame dropped", err, false);
+      return SendResult::DroppedBufferFull;
+    }
+    errors.fetch_add(1, std::memory_order_relaxed);
+    dropped_link_down.fetch_add(1, std::memory_order_relaxed);
+    up.store(false, std::memory_order_relaxed);
+    problem.report(err == ECONNREFUSED ? "peer refused a datagram (nothing listening on its port?)" : "send failed", err,
+                   false);
+    return SendResult::DroppedLinkDown;
+  }
 };
 
 class UdpLink final : public OutputLink {
@@ -144,24 +166,7 @@ class UdpLink final : public OutputLink {
       return SendResult::DroppedLinkDown;
     }
     const ssize_t n = ::send(fd_, frame.data(), frame.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
-    if (n == static_cast<ssize_t>(frame.size())) {
-      counters_.sent.fetch_add(1, std::memory_order_relaxed);
-      counters_.bytes.fetch_add(frame.size(), std::memory_order_relaxed);
-      counters_.up.store(true, std::memory_order_relaxed);
-      return SendResult::Sent;
-    }
-    const int err = n < 0 ? errno : EMSGSIZE;  // a datagram goes whole or not at all
-    if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
-      counters_.dropped_queue_full.fetch_add(1, std::memory_order_relaxed);
-      problem_.report("socket send buffer full, frame dropped", err, false);
-      return SendResult::DroppedBufferFull;
-    }
-    counters_.errors.fetch_add(1, std::memory_order_relaxed);
-    counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
-    counters_.up.store(false, std::memory_order_relaxed);
-    problem_.report(err == ECONNREFUSED ? "peer refused a datagram (nothing listening on its port?)" : "send failed",
-                    err, false);
-    return SendResult::DroppedLinkDown;
+    return counters_.count_send(n, frame.size(), problem_);
   }
 
   LinkStats stats() const override { return counters_.snapshot(problem_); }
@@ -314,23 +319,7 @@ class UdpListenLink final : public OutputLink {
     }
     const ssize_t n = ::sendto(fd_, frame.data(), frame.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
                                reinterpret_cast<const sockaddr*>(&peer), peer_length);
-    if (n == static_cast<ssize_t>(frame.size())) {
-      counters_.sent.fetch_add(1, std::memory_order_relaxed);
-      counters_.bytes.fetch_add(frame.size(), std::memory_order_relaxed);
-      counters_.up.store(true, std::memory_order_relaxed);
-      return SendResult::Sent;
-    }
-    const int err = n < 0 ? errno : EMSGSIZE;
-    if (err == EAGAIN || err == EWOULDBLOCK || err == ENOBUFS) {
-      counters_.dropped_queue_full.fetch_add(1, std::memory_order_relaxed);
-      problem_.report("socket send buffer full, frame dropped", err, false);
-      return SendResult::DroppedBufferFull;
-    }
-    counters_.errors.fetch_add(1, std::memory_order_relaxed);
-    counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
-    counters_.up.store(false, std::memory_order_relaxed);
-    problem_.report("send failed", err, false);
-    return SendResult::DroppedLinkDown;
+    return counters_.count_send(n, frame.size(), problem_);
   }
 
   ReceiveResult receive(std::span<std::uint8_t> into, int timeout_ms) noexcept override {

@@ -300,7 +300,7 @@ MountEstimate CaptureLatencyEstimator::mount() {
   return m;
 }
 
-CaptureClock::CaptureClock(const Config& config, GyroFeed* feed)
+CaptureClock::CaptureClock(const PipelineConfig& config, GyroFeed* feed)
     : config_(config.latency),
       feed_(config.latency.enabled ? feed : nullptr),
       estimator_(config.latency, extrinsic_from(config.body).R_body_camera),
@@ -321,7 +321,7 @@ std::optional<double> CaptureClock::colour_latency_sigma_s() const {
 MeasuredLatencySigmas CaptureClock::latency_sigmas() const {
   MeasuredLatencySigmas m{colour_latency_sigma_s(), depth_latency_sigma_s(), std::nullopt};
   // The translations come from both streams, from an instant between the colour's and the
-  // depth's, not the rotations' one applied (src/pipeline/README.md, Capture latency: on fr1_xyz
+  // depth's, not the rotations' one applied (src/pipeline/MEASUREMENTS.md#known-limit-fast-motion: on fr1_xyz
   // restamped, pair NEES 6.08 -> 5.33 with it; thinned to every 2nd frame 8.54 -> 7.86, still
   // above the gate's share).
   if (const auto lag = depth_lag_s()) m.translation_s = std::abs(*lag);

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
 
 namespace rgbdo {
@@ -128,31 +128,51 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
   if (n < 3 || curr.size() != n || prev_noise.size() != n || curr_noise.size() != n ||
       (!cells.empty() && cells.size() != n))
     return false;
-  const double c = config_.depth_noise_coeff;
   const double s0_squared =
       config_.residual_variance_factor ? variance_factor(prev, curr, prev_noise, curr_noise, T_prev_curr) : 1.0;
-  const double noise_scale = std::sqrt(s0_squared);
+  const Centres centres = centre_clouds(prev, curr, prev_noise, curr_noise, std::sqrt(s0_squared));
+  draw_cell_weights(cells, rng);
+  if (!fit_perturbations(centres, rng)) return false;
 
+  covariance = sample_covariance(samples_);
+  last_timing_.setZero();
+  if (timing_sigma_s > 0) {
+    const Vector6d g_prev = timing_gradient(prev, curr, prev_noise, true);
+    const Vector6d g_curr = timing_gradient(prev, curr, curr_noise, false);
+    last_timing_ = timing_sigma_s * timing_sigma_s * (g_prev * g_prev.transpose() + g_curr * g_curr.transpose());
+    covariance += last_timing_;
+  }
+  covariance *= config_.scale;
+  covariance = 0.5 * (covariance + covariance.transpose());  // exact symmetry for consumers
+  return is_valid_covariance(covariance);
+}
+
+PerturbationCovariance::Centres PerturbationCovariance::centre_clouds(const std::vector<Eigen::Vector3d>& prev,
+                                                                      const std::vector<Eigen::Vector3d>& curr,
+                                                                      const std::vector<PointNoise>& prev_noise,
+                                                                      const std::vector<PointNoise>& curr_noise,
+                                                                      double noise_scale) {
   // Centre both clouds on their weighted centroids (in double) so that the float sums hold
   // small numbers and the per-perturbation cross-covariance loses no precision.
+  const size_t n = prev.size();
   for (auto* v : {&sx_, &sy_, &sz_, &dx_, &dy_, &dz_, &ssx_, &ssy_, &rsx_, &rsy_, &rsz_, &sdx_, &sdy_, &rdx_, &rdy_,
                   &rdz_, &w_})
     v->resize(n);
   weights_.resize(n);
   double total = 0;
-  Eigen::Vector3d centre_s = Eigen::Vector3d::Zero(), centre_d = Eigen::Vector3d::Zero();
+  Centres c;
   for (size_t k = 0; k < n; ++k) {
-    const double w = pair_weight(prev[k], curr[k], c);  // the same weights as the fit's
+    const double w = pair_weight(prev[k], curr[k], config_.depth_noise_coeff);  // the same weights as the fit's
     weights_[k] = w;
     total += w;
-    centre_s += w * curr[k];
-    centre_d += w * prev[k];
+    c.curr += w * curr[k];
+    c.prev += w * prev[k];
   }
-  centre_s /= total;
-  centre_d /= total;
+  c.curr /= total;
+  c.prev /= total;
   const auto f = [](double x) { return static_cast<float>(x); };
   for (size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3d s = curr[k] - centre_s, d = prev[k] - centre_d;
+    const Eigen::Vector3d s = curr[k] - c.curr, d = prev[k] - c.prev;
     const Eigen::Vector2d ls = noise_scale * curr_noise[k].lateral, ld = noise_scale * prev_noise[k].lateral;
     const Eigen::Vector3d rs = noise_scale * curr_noise[k].ray, rd = noise_scale * prev_noise[k].ray;
     sx_[k] = f(s.x()), sy_[k] = f(s.y()), sz_[k] = f(s.z());
@@ -163,9 +183,13 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
     rdx_[k] = f(rd.x()), rdy_[k] = f(rd.y()), rdz_[k] = f(rd.z());
     w_[k] = f(weights_[k] / total);
   }
+  return c;
+}
 
+void PerturbationCovariance::draw_cell_weights(std::span<const std::uint16_t> cells, Rng& rng) {
   // Each perturbation re-weights the image cells by independent Exp(1) draws (a Bayesian
   // bootstrap of the inlier set by cell); one cell of weight 1 when not resampling.
+  const size_t n = w_.size();
   const size_t P = static_cast<size_t>(padded_perturbations_);
   int cell_count = 1;
   cell_.assign(n, 0);
@@ -181,9 +205,12 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
   perturbation_weight_.assign(P, 0.0);
   for (size_t cc = 0; cc < static_cast<size_t>(cell_count); ++cc)
     for (size_t p = 0; p < P; ++p) perturbation_weight_[p] += cell_total_[cc] * cell_weight_[cc * P + p];
+}
 
+bool PerturbationCovariance::fit_perturbations(const Centres& centres, Rng& rng) {
+  const size_t P = static_cast<size_t>(padded_perturbations_);
   simd::PerturbationInput in;
-  in.points = static_cast<int>(n);
+  in.points = static_cast<int>(w_.size());
   in.perturbations = padded_perturbations_;
   in.sx = sx_.data(), in.sy = sy_.data(), in.sz = sz_.data();
   in.dx = dx_.data(), in.dy = dy_.data(), in.dz = dz_.data();
@@ -214,21 +241,10 @@ bool PerturbationCovariance::estimate(const std::vector<Eigen::Vector3d>& prev, 
     const double weight_sum = perturbation_weight_[static_cast<size_t>(p)];
     Eigen::Isometry3d T;  // maps centred current points onto centred previous ones
     if (!fit_from_sums(s, d, m, weight_sum, T)) return false;
-    T.translation() += centre_d - T.linear() * centre_s;
+    T.translation() += centres.prev - T.linear() * centres.curr;
     samples_.push_back(xi_from_transform(T));
   }
-
-  covariance = sample_covariance(samples_);
-  last_timing_.setZero();
-  if (timing_sigma_s > 0) {
-    const Vector6d g_prev = timing_gradient(prev, curr, prev_noise, true);
-    const Vector6d g_curr = timing_gradient(prev, curr, curr_noise, false);
-    last_timing_ = timing_sigma_s * timing_sigma_s * (g_prev * g_prev.transpose() + g_curr * g_curr.transpose());
-    covariance += last_timing_;
-  }
-  covariance *= config_.scale;
-  covariance = 0.5 * (covariance + covariance.transpose());  // exact symmetry for consumers
-  return is_valid_covariance(covariance);
+  return true;
 }
 
 }  // namespace rgbdo

@@ -137,18 +137,17 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
                          DepthAlignment& out) {
   out = DepthAlignment{};
   if (prev.empty() || curr.empty() || prev.cols != curr.cols || prev.rows != curr.rows) return;
-  const int cell_grid = std::max(1, static_cast<int>(std::lround(config_.cell_px / config_.stride_px)));
-  const int cells_x = (curr.cols + cell_grid - 1) / cell_grid, cells_y = (curr.rows + cell_grid - 1) / cell_grid;
-  cell_gradient_.resize(static_cast<size_t>(cells_x * cells_y));
+  cell_grid_ = std::max(1, static_cast<int>(std::lround(config_.cell_px / config_.stride_px)));
+  cells_x_ = (curr.cols + cell_grid_ - 1) / cell_grid_;
+  const int cells_y = (curr.rows + cell_grid_ - 1) / cell_grid_;
+  cell_gradient_.resize(static_cast<size_t>(cells_x_ * cells_y));
   cell_count_.resize(cell_gradient_.size());
   const size_t capacity = curr.point.size();
   if (terms_.size() < capacity) terms_.resize(capacity), term_cells_.resize(capacity), scaled_.reserve(capacity);
   term_count_ = 0;
 
   Eigen::Isometry3d T = seed;
-  Matrix6d H;
-  double s2 = 0;  // the last iteration's a-posteriori variance factor
-  int used = 0;
+  NormalEquations eq;
   // The association kernel's constants; the clouds' grids are pinhole (DepthCloudBuilder): no
   // lens model, the projection rounded to the nearest sample by truncating from + 0.5.
   simd::AssociateInput in{};
@@ -161,81 +160,96 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   in.coeff = static_cast<float>(depth_noise_coeff_);
   in.floor2 = static_cast<float>(2 * quantum_sigma_m_ * quantum_sigma_m_);
   for (int it = 0; it < config_.iterations; ++it) {
-    // The associations and their residuals at T, in single precision: a few thousand points,
-    // each to well below the depth's own resolution (the sums are kept in double).
-    for (int row = 0; row < 3; ++row) {
-      for (int col = 0; col < 3; ++col) in.r[3 * row + col] = static_cast<float>(T.linear()(row, col));
-      in.t[row] = static_cast<float>(T.translation()(row));
-    }
-    // Every step but the last takes every other point (a checkerboard, alternating): they only
-    // have to come near; the last one, which the covariance is computed at, takes them all.
-    const bool last = it == config_.iterations - 1;
-    in.step = last ? 1 : 2;
-    term_count_ = 0;
-    for (int j = 0; j < curr.rows; ++j) {
-      const int first = last ? 0 : ((j + it) & 1);
-      in.first_index = j * curr.cols + first;
-      in.curr = curr.point[static_cast<size_t>(in.first_index)].data();
-      in.n = (curr.cols - first + in.step - 1) / in.step;
-      const auto found = static_cast<size_t>(associate_(in, terms_.data() + term_count_));
-      const int cell_row = (j / cell_grid) * cells_x;
-      for (size_t k = term_count_; k < term_count_ + found; ++k)
-        term_cells_[k] = cell_row + (terms_[k].curr_index - j * curr.cols) / cell_grid;
-      term_count_ += found;
-    }
+    associate(curr, T, it, in);
     if (static_cast<int>(term_count_) < config_.min_points) return;
-    const std::span<const simd::Association> terms(terms_.data(), term_count_);
-    // Tukey's biweight on the normalised residuals, its scale their median absolute deviation
-    // (over every 4th association: plenty for a median): associations across a crease or an
-    // occlusion edge weigh nothing, whatever the sensor's noise.
-    scaled_.clear();
-    for (size_t k = 0; k < terms.size(); k += 4) scaled_.push_back(terms[k].r * terms[k].r * terms[k].w);
-    const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
-    std::nth_element(scaled_.begin(), mid, scaled_.end());
-    const double scale2 = 1.4826 * 1.4826 * static_cast<double>(*mid);
-    const double cutoff2 = 4.685 * 4.685 * std::max(scale2, 1e-24);
-
-    std::array<double, 21> h{};  // the lower triangle of H, row by row
-    Vector6d b = Vector6d::Zero();
-    std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
-    std::fill(cell_count_.begin(), cell_count_.end(), 0);
-    double sum_wr2 = 0, sum_weight = 0;
-    used = 0;
-    // No cutoff below the depth's quantisation: exact depth has residuals of rounding only,
-    // whose median says nothing of which associations are wrong.
-    const double floor_r2 = 4.685 * 4.685 * quantum_sigma_m_ * quantum_sigma_m_;
-    for (size_t a = 0; a < terms.size(); ++a) {
-      const simd::Association& term = terms[a];
-      const double r2 = static_cast<double>(term.r) * term.r;
-      const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
-      if (u2 >= 1) continue;
-      const double robust = (1 - u2) * (1 - u2);
-      const double w = robust * term.w;
-      Vector6d J;
-      for (int e = 0; e < 6; ++e) J(e) = term.j[e];
-      for (int row = 0, at = 0; row < 6; ++row)
-        for (int col = 0; col <= row; ++col, ++at) h[static_cast<size_t>(at)] += w * J(row) * J(col);
-      const double wr = w * term.r;
-      b += wr * J;
-      sum_wr2 += wr * term.r;
-      sum_weight += robust;
-      const auto cell = static_cast<size_t>(term_cells_[a]);
-      cell_gradient_[cell] += wr * J;
-      ++cell_count_[cell];
-      ++used;
-    }
-    if (used < config_.min_points) return;
-    for (int row = 0, at = 0; row < 6; ++row)
-      for (int col = 0; col <= row; ++col, ++at) H(row, col) = H(col, row) = h[static_cast<size_t>(at)];
-    s2 = sum_wr2 / std::max(sum_weight - 6, 1.0);
-    const Eigen::LDLT<Matrix6d> ldlt(H);
+    eq = weighted_normal_equations();
+    if (eq.used < config_.min_points) return;
+    const Eigen::LDLT<Matrix6d> ldlt(eq.H);
     if (ldlt.info() != Eigen::Success) return;
-    const Vector6d step = -ldlt.solve(b);
+    const Vector6d step = -ldlt.solve(eq.b);
     if (!step.allFinite()) return;
     T = T * transform_from_xi(step);
     if (step.head<3>().norm() < kStepTranslationM && step.tail<3>().norm() < kStepRotationRad) break;
   }
+  if (!cluster_covariance(eq, out)) return;
+  out.T_prev_curr = T;
+  out.points = eq.used;
+  out.ok = out.constrained > 0 && out.covariance.allFinite();
+  if (out.ok) out.depth_noise_coeff = residual_noise_coeff(prev, curr, T);
+}
 
+void DepthAligner::associate(const DepthCloud& curr, const Eigen::Isometry3d& T, int it, simd::AssociateInput& in) {
+  // The associations and their residuals at T, in single precision: a few thousand points,
+  // each to well below the depth's own resolution (the sums are kept in double).
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) in.r[3 * row + col] = static_cast<float>(T.linear()(row, col));
+    in.t[row] = static_cast<float>(T.translation()(row));
+  }
+  // Every step but the last takes every other point (a checkerboard, alternating): they only
+  // have to come near; the last one, which the covariance is computed at, takes them all.
+  const bool last = it == config_.iterations - 1;
+  in.step = last ? 1 : 2;
+  term_count_ = 0;
+  for (int j = 0; j < curr.rows; ++j) {
+    const int first = last ? 0 : ((j + it) & 1);
+    in.first_index = j * curr.cols + first;
+    in.curr = curr.point[static_cast<size_t>(in.first_index)].data();
+    in.n = (curr.cols - first + in.step - 1) / in.step;
+    const auto found = static_cast<size_t>(associate_(in, terms_.data() + term_count_));
+    const int cell_row = (j / cell_grid_) * cells_x_;
+    for (size_t k = term_count_; k < term_count_ + found; ++k)
+      term_cells_[k] = cell_row + (terms_[k].curr_index - j * curr.cols) / cell_grid_;
+    term_count_ += found;
+  }
+}
+
+DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
+  const std::span<const simd::Association> terms(terms_.data(), term_count_);
+  // Tukey's biweight on the normalised residuals, its scale their median absolute deviation
+  // (over every 4th association: plenty for a median): associations across a crease or an
+  // occlusion edge weigh nothing, whatever the sensor's noise.
+  scaled_.clear();
+  for (size_t k = 0; k < terms.size(); k += 4) scaled_.push_back(terms[k].r * terms[k].r * terms[k].w);
+  const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
+  std::nth_element(scaled_.begin(), mid, scaled_.end());
+  const double scale2 = 1.4826 * 1.4826 * static_cast<double>(*mid);
+  const double cutoff2 = 4.685 * 4.685 * std::max(scale2, 1e-24);
+
+  NormalEquations eq;
+  std::array<double, 21> h{};  // the lower triangle of H, row by row
+  std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
+  std::fill(cell_count_.begin(), cell_count_.end(), 0);
+  double sum_wr2 = 0, sum_weight = 0;
+  // No cutoff below the depth's quantisation: exact depth has residuals of rounding only,
+  // whose median says nothing of which associations are wrong.
+  const double floor_r2 = 4.685 * 4.685 * quantum_sigma_m_ * quantum_sigma_m_;
+  for (size_t a = 0; a < terms.size(); ++a) {
+    const simd::Association& term = terms[a];
+    const double r2 = static_cast<double>(term.r) * term.r;
+    const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
+    if (u2 >= 1) continue;
+    const double robust = (1 - u2) * (1 - u2);
+    const double w = robust * term.w;
+    Vector6d J;
+    for (int e = 0; e < 6; ++e) J(e) = term.j[e];
+    for (int row = 0, at = 0; row < 6; ++row)
+      for (int col = 0; col <= row; ++col, ++at) h[static_cast<size_t>(at)] += w * J(row) * J(col);
+    const double wr = w * term.r;
+    eq.b += wr * J;
+    sum_wr2 += wr * term.r;
+    sum_weight += robust;
+    const auto cell = static_cast<size_t>(term_cells_[a]);
+    cell_gradient_[cell] += wr * J;
+    ++cell_count_[cell];
+    ++eq.used;
+  }
+  for (int row = 0, at = 0; row < 6; ++row)
+    for (int col = 0; col <= row; ++col, ++at) eq.H(row, col) = eq.H(col, row) = h[static_cast<size_t>(at)];
+  eq.s2 = sum_wr2 / std::max(sum_weight - 6, 1.0);
+  return eq;
+}
+
+bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out) const {
   // The covariance at the last linearisation: cells as clusters of correlated residuals.
   Matrix6d spread = Matrix6d::Zero();
   int cells = 0;
@@ -244,11 +258,11 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
       spread += cell_gradient_[c] * cell_gradient_[c].transpose();
       ++cells;
     }
-  if (cells < kMinCells) return;
+  if (cells < kMinCells) return false;
   // Eigen-decomposed: a direction the surfaces leave free (a plane's sliding, a corridor's
   // length) carries no information, however small the residuals (exact depth).
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
-  if (eig.info() != Eigen::Success || !(eig.eigenvalues().maxCoeff() > 0)) return;
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(eq.H);
+  if (eig.info() != Eigen::Success || !(eig.eigenvalues().maxCoeff() > 0)) return false;
   const double max_eigenvalue = eig.eigenvalues().maxCoeff();
   int k = 0;
   Matrix6d basis = Matrix6d::Zero();
@@ -263,14 +277,11 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   // The clusters' spread (with the small-sample correction) and, so that few cells cannot leave
   // a direction without variance, the independent-residual term weighted by 6 / cells.
   const double n_cells = cells;
-  out.covariance = H_inv * spread * H_inv * (n_cells / (n_cells - 1)) + H_inv * (s2 * 6.0 / n_cells);
+  out.covariance = H_inv * spread * H_inv * (n_cells / (n_cells - 1)) + H_inv * (eq.s2 * 6.0 / n_cells);
   out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
   out.basis = basis;
   out.constrained = k;
-  out.T_prev_curr = T;
-  out.points = used;
-  out.ok = k > 0 && out.covariance.allFinite();
-  if (out.ok) out.depth_noise_coeff = residual_noise_coeff(prev, curr, T);
+  return true;
 }
 
 double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T) {

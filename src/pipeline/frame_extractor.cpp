@@ -8,7 +8,7 @@
 
 namespace rgbdo {
 
-FrameExtractor::FrameExtractor(const Config& config, TaskRunner* runner)
+FrameExtractor::FrameExtractor(const PipelineConfig& config, TaskRunner* runner)
     : depth_(config.depth),
       border_px_(config.features.border_px),
       min_features_(config.ransac.min_inliers),

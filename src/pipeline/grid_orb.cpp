@@ -126,56 +126,66 @@ GridOrbExtractor::GridOrbExtractor(const FeatureConfig& config, int width, int h
     per_level *= factor;
     const int usable = std::max(w - 2 * kBorder, 1) * std::max(h - 2 * kBorder, 1);
     L.cell_px = std::clamp(static_cast<int>(std::sqrt(usable / std::max(L.budget, 1))), kMinCellPx, kMaxCellPx);
-    if (l > 0) {
-      // Source position of each output pixel centre in the previous level, pixel centres aligned.
-      const Level& src = levels_[static_cast<size_t>(l - 1)];
-      const double step = config.orb_scale_factor;
-      // The source pixel left of the output centre and the right one's weight; a weight that
-      // rounds to 256 is the next pixel's 0, so weights fit a byte (the kernels' form).
-      const auto source = [&](int o, int n_src) {
-        const double s = (o + 0.5) * step - 0.5;
-        int i = static_cast<int>(std::floor(s));
-        int w8 = static_cast<int>(std::lround((s - i) * 256));
-        if (w8 == 256) ++i, w8 = 0;
-        if (i < 0) i = 0, w8 = 0;
-        if (i >= n_src - 1) i = n_src - 1, w8 = 0;
-        return std::pair{i, w8};
-      };
-      L.y0.resize(static_cast<size_t>(h));
-      L.wy.resize(static_cast<size_t>(h));
-      for (int o = 0; o < h; ++o) {
-        const auto [i, w8] = source(o, src.image.rows);
-        L.y0[static_cast<size_t>(o)] = i;
-        L.wy[static_cast<size_t>(o)] = static_cast<std::uint16_t>(w8);
-      }
-      L.x_groups.assign(static_cast<size_t>((w + 7) / 8), simd::ResampleGroup{});
-      for (int o = 0; o < w; ++o) {
-        const auto [i, w8] = source(o, src.image.cols);
-        simd::ResampleGroup& g = L.x_groups[static_cast<size_t>(o / 8)];
-        if (o % 8 == 0) g.base = i;
-        // Eight outputs span at most 7 * 2 + 1 source pixels at scale factors up to 2 (the
-        // configuration's limit): index + 1 stays within the 16 bytes a kernel loads.
-        if (i - g.base + 1 > 15) throw std::logic_error("GRID_ORB: a pyramid step wider than 2");
-        g.index[o % 8] = static_cast<std::uint8_t>(i - g.base);
-        g.weight[o % 8] = static_cast<std::uint8_t>(w8);
-      }
-    }
+    if (l > 0) plan_resampling(L, levels_[static_cast<size_t>(l - 1)], config.orb_scale_factor);
     scale *= config.orb_scale_factor;
   }
   row_buffer_.assign(static_cast<size_t>(width) + 16, 0);  // + what a resampling kernel may read past a row
+  reserve_detection_buffers();
+  steer_pattern();
+}
+
+// Each output pixel centre's source in the previous level, pixel centres aligned: the rows'
+// first source row and weight, the columns' in groups of eight for the kernels.
+void GridOrbExtractor::plan_resampling(Level& L, const Level& src, double step) {
+  const int w = L.image.cols, h = L.image.rows;
+  // The source pixel left of the output centre and the right one's weight; a weight that
+  // rounds to 256 is the next pixel's 0, so weights fit a byte (the kernels' form).
+  const auto source = [&](int o, int n_src) {
+    const double s = (o + 0.5) * step - 0.5;
+    int i = static_cast<int>(std::floor(s));
+    int w8 = static_cast<int>(std::lround((s - i) * 256));
+    if (w8 == 256) ++i, w8 = 0;
+    if (i < 0) i = 0, w8 = 0;
+    if (i >= n_src - 1) i = n_src - 1, w8 = 0;
+    return std::pair{i, w8};
+  };
+  L.y0.resize(static_cast<size_t>(h));
+  L.wy.resize(static_cast<size_t>(h));
+  for (int o = 0; o < h; ++o) {
+    const auto [i, w8] = source(o, src.image.rows);
+    L.y0[static_cast<size_t>(o)] = i;
+    L.wy[static_cast<size_t>(o)] = static_cast<std::uint16_t>(w8);
+  }
+  L.x_groups.assign(static_cast<size_t>((w + 7) / 8), simd::ResampleGroup{});
+  for (int o = 0; o < w; ++o) {
+    const auto [i, w8] = source(o, src.image.cols);
+    simd::ResampleGroup& g = L.x_groups[static_cast<size_t>(o / 8)];
+    if (o % 8 == 0) g.base = i;
+    // Eight outputs span at most 7 * 2 + 1 source pixels at scale factors up to 2 (the
+    // configuration's limit): index + 1 stays within the 16 bytes a kernel loads.
+    if (i - g.base + 1 > 15) throw std::logic_error("GRID_ORB: a pyramid step wider than 2");
+    g.index[o % 8] = static_cast<std::uint8_t>(i - g.base);
+    g.weight[o % 8] = static_cast<std::uint8_t>(w8);
+  }
+}
+
+void GridOrbExtractor::reserve_detection_buffers() {
   // Bounds fixed here, so detection never allocates: corners before suppression at most one
   // pixel in four of a level (a real image has a few per cent; only noise reaches it, and the
   // scan then stops), cells as many as the smallest cell makes.
-  const size_t max_cells = static_cast<size_t>(width / kMinCellPx + 1) * static_cast<size_t>(height / kMinCellPx + 1);
+  const size_t max_cells = static_cast<size_t>(width_ / kMinCellPx + 1) * static_cast<size_t>(height_ / kMinCellPx + 1);
   cell_best_.reserve(max_cells);
   for (Level& L : levels_) {
     const auto pixels = static_cast<size_t>(L.image.cols) * static_cast<size_t>(L.image.rows);
     L.candidates.reserve(pixels / 4);
-    L.chosen.reserve(max_cells + static_cast<size_t>(config.max_features));
+    L.chosen.reserve(max_cells + static_cast<size_t>(config_.max_features));
     L.score.assign(pixels, 0);
     L.flags.assign(static_cast<size_t>(L.image.cols), 0);
     L.cell_has.reserve(max_cells);
   }
+}
+
+void GridOrbExtractor::steer_pattern() {
   // The pattern steered to every orientation step, rounded in integers, as offsets in a box image.
   const auto& base = pattern();
   for (int k = 0; k < kAngleSteps; ++k) {

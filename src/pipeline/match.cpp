@@ -92,69 +92,12 @@ void SymmetricMatcher::match_within(const cv::Mat& prev, const cv::Mat& curr, st
   CV_Assert(radius > 0);
   prev_nn_.assign(static_cast<size_t>(prev.rows), simd::NearestTwo{});
   curr_nn_.assign(static_cast<size_t>(curr.rows), simd::NearestTwo{});
-
-  // The grid: cells at least `radius` wide, so a window spans at most 3 x 3 of them.
-  double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
-  for (const Eigen::Vector2d& p : curr_positions) {
-    min_x = std::min(min_x, p.x()), max_x = std::max(max_x, p.x());
-    min_y = std::min(min_y, p.y()), max_y = std::max(max_y, p.y());
-  }
-  if (!(max_x >= min_x && max_y >= min_y)) return;  // no finite position
-  const double cell_w = std::max(radius, (max_x - min_x) / (kMaxGridCells - 1));
-  const double cell_h = std::max(radius, (max_y - min_y) / (kMaxGridCells - 1));
-  const int nx = std::min(static_cast<int>((max_x - min_x) / cell_w) + 1, kMaxGridCells);
-  const int ny = std::min(static_cast<int>((max_y - min_y) / cell_h) + 1, kMaxGridCells);
-  // Clamped in floating point first: a far-off or NaN position must not overflow the int.
-  const auto cell_x = [&](double x) {
-    const double c = std::floor((x - min_x) / cell_w);
-    return c >= 0 ? static_cast<int>(std::min(c, static_cast<double>(nx))) : -1;
-  };
-  const auto cell_y = [&](double y) {
-    const double c = std::floor((y - min_y) / cell_h);
-    return c >= 0 ? static_cast<int>(std::min(c, static_cast<double>(ny))) : -1;
-  };
-  // Counting sort of the current keypoints by cell (index order within a cell).
-  cell_start_.assign(static_cast<size_t>(nx * ny + 1), 0);
-  cell_of_.resize(static_cast<size_t>(curr.rows));
-  for (int j = 0; j < curr.rows; ++j) {
-    const Eigen::Vector2d& p = curr_positions[static_cast<size_t>(j)];
-    const int cx = cell_x(p.x()), cy = cell_y(p.y());
-    const bool inside = cx >= 0 && cx < nx && cy >= 0 && cy < ny;  // false only for NaN
-    cell_of_[static_cast<size_t>(j)] = inside ? cy * nx + cx : -1;
-    if (inside) ++cell_start_[static_cast<size_t>(cy * nx + cx + 1)];
-  }
-  for (size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
-  by_cell_.resize(static_cast<size_t>(cell_start_.back()));
-  by_cell_position_.resize(by_cell_.size());
-  candidates_.resize(by_cell_.size());  // every search fills at most all of them
-  distances_.resize(by_cell_.size());
-  for (int j = 0; j < curr.rows; ++j) {
-    const int c = cell_of_[static_cast<size_t>(j)];
-    if (c < 0) continue;
-    // cell_start_[c] counts up as the cell fills; shifted back below.
-    const auto slot = static_cast<size_t>(cell_start_[static_cast<size_t>(c)]++);
-    by_cell_[slot] = j;
-    by_cell_position_[slot] = curr_positions[static_cast<size_t>(j)];
-  }
-  for (size_t c = cell_start_.size() - 1; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
-  cell_start_[0] = 0;
+  const std::optional<Grid> grid = Grid::over(curr_positions, radius, kMaxGridCells);
+  if (!grid) return;  // no finite position
+  sort_by_cell(*grid, curr_positions);
 
   for (int i = 0; i < prev.rows; ++i) {
-    const Eigen::Vector2d& p = predicted[static_cast<size_t>(i)];
-    if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;
-    const double lo_x = p.x() - radius, hi_x = p.x() + radius, lo_y = p.y() - radius, hi_y = p.y() + radius;
-    if (hi_x < min_x || lo_x > max_x || hi_y < min_y || lo_y > max_y) continue;  // window off the frame
-    const int cx0 = std::max(cell_x(lo_x), 0), cx1 = std::min(cell_x(hi_x), nx - 1);
-    const int cy0 = std::max(cell_y(lo_y), 0), cy1 = std::min(cell_y(hi_y), ny - 1);
-    int n = 0;
-    for (int cy = cy0; cy <= cy1; ++cy) {
-      // The cells cx0..cx1 of one grid row are contiguous in by_cell_.
-      const int begin = cell_start_[static_cast<size_t>(cy * nx + cx0)], end = cell_start_[static_cast<size_t>(cy * nx + cx1 + 1)];
-      for (int k = begin; k < end; ++k) {
-        const Eigen::Vector2d& q = by_cell_position_[static_cast<size_t>(k)];
-        if (q.x() >= lo_x && q.x() <= hi_x && q.y() >= lo_y && q.y() <= hi_y) candidates_[static_cast<size_t>(n++)] = by_cell_[static_cast<size_t>(k)];
-      }
-    }
+    const int n = window_candidates(*grid, predicted[static_cast<size_t>(i)], radius);
     if (n == 0) continue;
     hamming_rows_(prev.ptr<std::uint8_t>(i), curr.data, curr.step, candidates_.data(), n, prev.cols, distances_.data());
     simd::NearestTwo& forward = prev_nn_[static_cast<size_t>(i)];
@@ -166,6 +109,83 @@ void SymmetricMatcher::match_within(const cv::Mat& prev, const cv::Mat& curr, st
     }
   }
   keep_mutual(prev.rows, true, out);
+}
+
+// The grid: cells at least `radius` wide, so a window spans at most 3 x 3 of them.
+std::optional<SymmetricMatcher::Grid> SymmetricMatcher::Grid::over(std::span<const Eigen::Vector2d> positions,
+                                                                   double radius, int max_cells) {
+  Grid g;
+  for (const Eigen::Vector2d& p : positions) {
+    g.min_x = std::min(g.min_x, p.x()), g.max_x = std::max(g.max_x, p.x());
+    g.min_y = std::min(g.min_y, p.y()), g.max_y = std::max(g.max_y, p.y());
+  }
+  if (!(g.max_x >= g.min_x && g.max_y >= g.min_y)) return std::nullopt;
+  g.cell_w = std::max(radius, (g.max_x - g.min_x) / (max_cells - 1));
+  g.cell_h = std::max(radius, (g.max_y - g.min_y) / (max_cells - 1));
+  g.nx = std::min(static_cast<int>((g.max_x - g.min_x) / g.cell_w) + 1, max_cells);
+  g.ny = std::min(static_cast<int>((g.max_y - g.min_y) / g.cell_h) + 1, max_cells);
+  return g;
+}
+
+// Clamped in floating point first: a far-off or NaN position must not overflow the int.
+int SymmetricMatcher::Grid::cell_x(double x) const {
+  const double c = std::floor((x - min_x) / cell_w);
+  return c >= 0 ? static_cast<int>(std::min(c, static_cast<double>(nx))) : -1;
+}
+
+int SymmetricMatcher::Grid::cell_y(double y) const {
+  const double c = std::floor((y - min_y) / cell_h);
+  return c >= 0 ? static_cast<int>(std::min(c, static_cast<double>(ny))) : -1;
+}
+
+// Counting sort of the current keypoints by cell (index order within a cell).
+void SymmetricMatcher::sort_by_cell(const Grid& g, std::span<const Eigen::Vector2d> curr_positions) {
+  const auto rows = static_cast<int>(curr_positions.size());
+  cell_start_.assign(static_cast<size_t>(g.nx * g.ny + 1), 0);
+  cell_of_.resize(static_cast<size_t>(rows));
+  for (int j = 0; j < rows; ++j) {
+    const Eigen::Vector2d& p = curr_positions[static_cast<size_t>(j)];
+    const int cx = g.cell_x(p.x()), cy = g.cell_y(p.y());
+    const bool inside = cx >= 0 && cx < g.nx && cy >= 0 && cy < g.ny;  // false only for NaN
+    cell_of_[static_cast<size_t>(j)] = inside ? cy * g.nx + cx : -1;
+    if (inside) ++cell_start_[static_cast<size_t>(cy * g.nx + cx + 1)];
+  }
+  for (size_t c = 1; c < cell_start_.size(); ++c) cell_start_[c] += cell_start_[c - 1];
+  by_cell_.resize(static_cast<size_t>(cell_start_.back()));
+  by_cell_position_.resize(by_cell_.size());
+  candidates_.resize(by_cell_.size());  // every search fills at most all of them
+  distances_.resize(by_cell_.size());
+  for (int j = 0; j < rows; ++j) {
+    const int c = cell_of_[static_cast<size_t>(j)];
+    if (c < 0) continue;
+    // cell_start_[c] counts up as the cell fills; shifted back below.
+    const auto slot = static_cast<size_t>(cell_start_[static_cast<size_t>(c)]++);
+    by_cell_[slot] = j;
+    by_cell_position_[slot] = curr_positions[static_cast<size_t>(j)];
+  }
+  for (size_t c = cell_start_.size() - 1; c > 0; --c) cell_start_[c] = cell_start_[c - 1];
+  cell_start_[0] = 0;
+}
+
+// The current keypoints within `radius` of p (in both coordinates) into candidates_; how many.
+int SymmetricMatcher::window_candidates(const Grid& g, const Eigen::Vector2d& p, double radius) {
+  if (!std::isfinite(p.x()) || !std::isfinite(p.y())) return 0;
+  const double lo_x = p.x() - radius, hi_x = p.x() + radius, lo_y = p.y() - radius, hi_y = p.y() + radius;
+  if (hi_x < g.min_x || lo_x > g.max_x || hi_y < g.min_y || lo_y > g.max_y) return 0;  // window off the frame
+  const int cx0 = std::max(g.cell_x(lo_x), 0), cx1 = std::min(g.cell_x(hi_x), g.nx - 1);
+  const int cy0 = std::max(g.cell_y(lo_y), 0), cy1 = std::min(g.cell_y(hi_y), g.ny - 1);
+  int n = 0;
+  for (int cy = cy0; cy <= cy1; ++cy) {
+    // The cells cx0..cx1 of one grid row are contiguous in by_cell_.
+    const int begin = cell_start_[static_cast<size_t>(cy * g.nx + cx0)];
+    const int end = cell_start_[static_cast<size_t>(cy * g.nx + cx1 + 1)];
+    for (int k = begin; k < end; ++k) {
+      const Eigen::Vector2d& q = by_cell_position_[static_cast<size_t>(k)];
+      if (q.x() >= lo_x && q.x() <= hi_x && q.y() >= lo_y && q.y() <= hi_y)
+        candidates_[static_cast<size_t>(n++)] = by_cell_[static_cast<size_t>(k)];
+    }
+  }
+  return n;
 }
 
 void SymmetricMatcher::keep_mutual(int n_prev, bool binary, std::vector<Match>& out) const {

@@ -7,7 +7,7 @@
 
 namespace rgbdo {
 
-OdometryPipeline::OdometryPipeline(const Config& config) : extractor_(config), estimator_(config) {}
+OdometryPipeline::OdometryPipeline(const PipelineConfig& config) : extractor_(config), estimator_(config) {}
 
 std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
   const auto start = std::chrono::steady_clock::now();

@@ -8,7 +8,7 @@
 
 #include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/cost_stage.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/splitmix64.hpp"
 
 namespace rgbdo {
@@ -90,7 +90,7 @@ void predict_positions(const KeypointGeometry& prev, const MotionPrior& prior, d
 
 }  // namespace
 
-PairEstimator::PairEstimator(const Config& config)
+PairEstimator::PairEstimator(const PipelineConfig& config)
     : config_(config),
       paper_noise_(config.covariance.model == "paper"),
       noise_(sensor_noise(config)),
@@ -286,7 +286,8 @@ int PairEstimator::refine_with_depth(const ProcessedFrame& prev, const Processed
   // 1-s rotation drift up by a third). Such a sensor's alignment is fused at a fixed factor
   // instead, weighed down so far that its slow errors stay below the features' over a second
   // while it still takes off each pair the errors the features cannot see (the split of an
-  // image shift between sideways translation and rotation; src/pipeline/README.md), or not at
+  // image shift between sideways translation and rotation;
+  // src/pipeline/MEASUREMENTS.md#on-the-kinect-at-fixed-factors-not-the-learnt-ones), or not at
   // all when that factor is 0.
   const bool trusted =
       std::max(alignment_trust_.translation_scale(), alignment_trust_.rotation_scale()) <=
@@ -344,67 +345,14 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
 
   const CostStagesEnd stages_end;
   const bool compensate = config_.depth.compensate_timing && dt_s > 0;
-  // Before this pair is solved, the previous pair's velocity is the best guess (zero after a gap).
-  const MotionPrior prior = last_pair_ ? motion_of(*last_pair_) : MotionPrior{};
-  const bool windowed = config_.matching.window_px > 0 && prev.features.descriptors.type() == CV_8UC1 &&
-                        curr.features.descriptors.type() == CV_8UC1;
-  Status solved = match_and_fit(prev, curr, windowed ? &prior : nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
-  if (windowed && (solved != Status::Ok || fit_.inliers.size() < 2 * static_cast<size_t>(config_.ransac.min_inliers))) {
-    // The prior was wrong (a jolt, a gap) or the scene is bare: the paper's search over all pairs.
-    r.rematched = true;
-    solved = match_and_fit(prev, curr, nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
-  }
-  if (solved != Status::Ok) return fail(solved);
-
-  Rng covariance_rng(mix(config_.seed, 2 * pair_key + 1));
-  Clock::time_point t0;  // each stage below reads the clock at its start
-  mark_cost_stage(CostStage::Track);
-  t0 = Clock::now();
-  r.tracked = track_keypoints(prev, curr);
-  const bool tracked = r.tracked > 0;
-  const KeypointGeometry& curr_geometry = tracked ? tracked_ : curr.geometry;
-  r.times.match_ms += ms_since(t0);  // the matches made precise: the log's stage times keep their columns
-  if (compensate || tracked) {
-    // Second pass, on the tracked keypoints: carry the depths to colour time with this pair's
-    // own velocity, which is better than the previous pair's whenever the depth frames are far
-    // enough apart.
-    mark_cost_stage(CostStage::PointPairs);
-    t0 = Clock::now();
-    const MotionPrior own = motion_from(fit_.T_prev_curr, dt_s);
-    build_point_pairs(matches_, prev.geometry, prev.times, curr_geometry, curr.times, compensate ? &own : nullptr,
-                      pairs_);
-    r.times.backproject_ms += ms_since(t0);
-    mark_cost_stage(CostStage::Ransac);
-    t0 = Clock::now();
-    describe_pair_noise(prev, curr);
-    ransac_.refine(pairs_.prev, pairs_.curr, fit_.T_prev_curr, refined_, &pair_covariances_);
-    r.times.ransac_ms += ms_since(t0);
-    if (refined_.status == Status::Ok) {
-      refined_.hypotheses = fit_.hypotheses;
-      std::swap(fit_, refined_);  // swaps buffers, allocates nothing
-    }
-  }
+  if (const Status solved = fit_features(prev, curr, dt_s, compensate, pair_key, r); solved != Status::Ok)
+    return fail(solved);
+  const KeypointGeometry& curr_geometry = track_and_refit(prev, curr, dt_s, compensate, r);
 
   mark_cost_stage(CostStage::Covariance);
-  t0 = Clock::now();
-  inlier_prev_.clear();
-  inlier_curr_.clear();
-  for (int k : fit_.inliers) {
-    inlier_prev_.push_back(pairs_.prev[static_cast<size_t>(k)]);
-    inlier_curr_.push_back(pairs_.curr[static_cast<size_t>(k)]);
-  }
+  const Clock::time_point t0 = Clock::now();
   Matrix6d cov;
-  bool cov_ok;
-  if (paper_noise_) {
-    cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
-  } else {
-    describe_inlier_noise(prev, curr, curr_geometry, dt_s);
-    const double timing_sigma_s =
-        config_.covariance.timing_sigma_s >= 0 ? config_.covariance.timing_sigma_s : stamp_jitter_.offset_sigma_s();
-    cov_ok = covariance_.estimate(inlier_prev_, inlier_curr_, inlier_prev_noise_, inlier_curr_noise_, inlier_cells_,
-                                  fit_.T_prev_curr, timing_sigma_s, covariance_rng, cov);
-  }
-  if (!cov_ok) {
+  if (!features_covariance(prev, curr, curr_geometry, dt_s, pair_key, cov)) {
     r.times.covariance_ms = ms_since(t0);
     return fail(Status::CovarianceFailed);
   }
@@ -418,33 +366,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const Vector6d xi = xi_from_transform(fit_.T_prev_curr);
   const bool learn = !paper_noise_ && xi.dot(cov.ldlt().solve(xi)) >= kChi2_6_99;
   if (learn) learn_keypoint_sigma(prev, curr, curr_geometry);
-  if (config_.refinement.enabled && !paper_noise_) {
-    mark_cost_stage(CostStage::Refine);
-    // The features' own rate, kept before the fusion changes fit_ and cov (last_feature_pair_).
-    const std::optional<PairRate> features_only =
-        dt_s > 0 ? std::optional<PairRate>(PairRate{xi / dt_s, cov, dt_s}) : std::nullopt;
-    depth_rotation_.reset();
-    r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov, r.depth_trusted);
-    if (depth_rotation_) {
-      r.depth_rotation = *depth_rotation_;
-      r.t_depth_prev_ns = r.t_prev_ns - (prev.times.t_colour_ns - prev.times.t_depth_ns);
-      r.t_depth_curr_ns = r.t_curr_ns - (curr.times.t_colour_ns - curr.times.t_depth_ns);
-    }
-    if (features_only) last_feature_pair_ = features_only;
-    r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
-                depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),
-                keypoint_sigma_.sigma_px(keypoint_sigma_.levels() - 1), keypoint_sigma_.levels() - 1};
-    mark_cost_stage(CostStage::Covariance);
-  }
-  if (dt_s > 0) {
-    const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};  // before the latency terms
-    if (!paper_noise_) {
-      const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)
-                                                           : Matrix6d::Zero();
-      cov += config_.covariance.scale * latency_covariance(latency_, depth_response, own, last_pair_);
-    }
-    last_pair_ = own;
-  }
+  if (config_.refinement.enabled && !paper_noise_) fuse_depth_alignment(prev, curr, dt_s, learn, xi, cov, r);
+  if (dt_s > 0) add_latency_terms(dt_s, cov);
   r.times.covariance_ms = ms_since(t0);
 
   r.status = Status::Ok;
@@ -453,6 +376,99 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.T_prev_curr = fit_.T_prev_curr;
   r.covariance = cov;
   return r;
+}
+
+Status PairEstimator::fit_features(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s,
+                                   bool compensate, std::uint64_t pair_key, PairResult& r) {
+  // Before this pair is solved, the previous pair's velocity is the best guess (zero after a gap).
+  const MotionPrior prior = last_pair_ ? motion_of(*last_pair_) : MotionPrior{};
+  const bool windowed = config_.matching.window_px > 0 && prev.features.descriptors.type() == CV_8UC1 &&
+                        curr.features.descriptors.type() == CV_8UC1;
+  Status solved = match_and_fit(prev, curr, windowed ? &prior : nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
+  if (windowed && (solved != Status::Ok || fit_.inliers.size() < 2 * static_cast<size_t>(config_.ransac.min_inliers))) {
+    // The prior was wrong (a jolt, a gap) or the scene is bare: the paper's search over all pairs.
+    r.rematched = true;
+    solved = match_and_fit(prev, curr, nullptr, dt_s, compensate ? &prior : nullptr, pair_key, r);
+  }
+  return solved;
+}
+
+const KeypointGeometry& PairEstimator::track_and_refit(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                                                       double dt_s, bool compensate, PairResult& r) {
+  mark_cost_stage(CostStage::Track);
+  Clock::time_point t0 = Clock::now();
+  r.tracked = track_keypoints(prev, curr);
+  const bool tracked = r.tracked > 0;
+  const KeypointGeometry& curr_geometry = tracked ? tracked_ : curr.geometry;
+  r.times.match_ms += ms_since(t0);  // the matches made precise: the log's stage times keep their columns
+  if (!compensate && !tracked) return curr_geometry;
+  // Second pass, on the tracked keypoints: carry the depths to colour time with this pair's
+  // own velocity, which is better than the previous pair's whenever the depth frames are far
+  // enough apart.
+  mark_cost_stage(CostStage::PointPairs);
+  t0 = Clock::now();
+  const MotionPrior own = motion_from(fit_.T_prev_curr, dt_s);
+  build_point_pairs(matches_, prev.geometry, prev.times, curr_geometry, curr.times, compensate ? &own : nullptr,
+                    pairs_);
+  r.times.backproject_ms += ms_since(t0);
+  mark_cost_stage(CostStage::Ransac);
+  t0 = Clock::now();
+  describe_pair_noise(prev, curr);
+  ransac_.refine(pairs_.prev, pairs_.curr, fit_.T_prev_curr, refined_, &pair_covariances_);
+  r.times.ransac_ms += ms_since(t0);
+  if (refined_.status == Status::Ok) {
+    refined_.hypotheses = fit_.hypotheses;
+    std::swap(fit_, refined_);  // swaps buffers, allocates nothing
+  }
+  return curr_geometry;
+}
+
+bool PairEstimator::features_covariance(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                                        const KeypointGeometry& curr_geometry, double dt_s, std::uint64_t pair_key,
+                                        Matrix6d& cov) {
+  Rng covariance_rng(mix(config_.seed, 2 * pair_key + 1));
+  inlier_prev_.clear();
+  inlier_curr_.clear();
+  for (int k : fit_.inliers) {
+    inlier_prev_.push_back(pairs_.prev[static_cast<size_t>(k)]);
+    inlier_curr_.push_back(pairs_.curr[static_cast<size_t>(k)]);
+  }
+  if (paper_noise_) return covariance_.estimate(inlier_prev_, inlier_curr_, fit_.T_prev_curr, covariance_rng, cov);
+  describe_inlier_noise(prev, curr, curr_geometry, dt_s);
+  const double timing_sigma_s =
+      config_.covariance.timing_sigma_s >= 0 ? config_.covariance.timing_sigma_s : stamp_jitter_.offset_sigma_s();
+  return covariance_.estimate(inlier_prev_, inlier_curr_, inlier_prev_noise_, inlier_curr_noise_, inlier_cells_,
+                              fit_.T_prev_curr, timing_sigma_s, covariance_rng, cov);
+}
+
+void PairEstimator::fuse_depth_alignment(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s,
+                                         bool learn, const Vector6d& features_xi, Matrix6d& cov, PairResult& r) {
+  mark_cost_stage(CostStage::Refine);
+  // The features' own rate, kept before the fusion changes fit_ and cov (last_feature_pair_).
+  const std::optional<PairRate> features_only =
+      dt_s > 0 ? std::optional<PairRate>(PairRate{features_xi / dt_s, cov, dt_s}) : std::nullopt;
+  depth_rotation_.reset();
+  r.depth_points = refine_with_depth(prev, curr, dt_s, learn, cov, r.depth_trusted);
+  if (depth_rotation_) {
+    r.depth_rotation = *depth_rotation_;
+    r.t_depth_prev_ns = r.t_prev_ns - (prev.times.t_colour_ns - prev.times.t_depth_ns);
+    r.t_depth_curr_ns = r.t_curr_ns - (curr.times.t_colour_ns - curr.times.t_depth_ns);
+  }
+  if (features_only) last_feature_pair_ = features_only;
+  r.sensor = {alignment_trust_.translation_scale(), alignment_trust_.rotation_scale(), depth_lag_.lag_s(),
+              depth_noise_.coeff(), keypoint_sigma_.sigma_px(0),
+              keypoint_sigma_.sigma_px(keypoint_sigma_.levels() - 1), keypoint_sigma_.levels() - 1};
+  mark_cost_stage(CostStage::Covariance);
+}
+
+void PairEstimator::add_latency_terms(double dt_s, Matrix6d& cov) {
+  const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};  // before the latency terms
+  if (!paper_noise_) {
+    const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)
+                                                         : Matrix6d::Zero();
+    cov += config_.covariance.scale * latency_covariance(latency_, depth_response, own, last_pair_);
+  }
+  last_pair_ = own;
 }
 
 }  // namespace rgbdo

@@ -5,7 +5,7 @@
 
 #include "rgbd_odometry/simd/kernels.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/umeyama.hpp"
 
 namespace rgbdo {

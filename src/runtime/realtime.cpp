@@ -14,7 +14,6 @@
 #include "rgbd_odometry/runtime/bounded_queue.hpp"
 #include "rgbd_odometry/runtime/frame_mailbox.hpp"
 #include "rgbd_odometry/runtime/worker_pool.hpp"
-#include "rgbd_odometry/sensor/usb_devices.hpp"
 #include "rgbd_odometry/pipeline/capture_latency.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
@@ -60,28 +59,28 @@ void pin_thread(const std::vector<int>& cpus, int role) {
 // One run's shared state; every thread function is a member.
 class Run {
  public:
-  Run(const Config& config, FrameFeed& feed, GyroFeed* gyro, const RealtimePipeline::OutputFn& on_output,
+  Run(const PipelineConfig& config, const RuntimeConfig& runtime, FrameFeed& feed, GyroFeed* gyro,
+      const RealtimePipeline::OutputFn& on_output,
       const RealtimePipeline::MessageFn& on_message, const std::function<void()>& on_tick)
-      : on_tick_(on_tick), config_(config), cpus_(parse_cpu_list(config.runtime.cpu_affinity)), feed_(feed), on_output_(on_output),
+      : on_tick_(on_tick), config_(config), runtime_(runtime), cpus_(parse_cpu_list(runtime.cpu_affinity)), feed_(feed),
+        on_output_(on_output),
         on_message_(on_message),
         mailbox_(!feed.live()),
-        pool_(config.runtime.extraction_threads > 1
-                  ? std::make_unique<WorkerPool>(config.runtime.extraction_threads - 1,
+        pool_(runtime.extraction_threads > 1
+                  ? std::make_unique<WorkerPool>(runtime.extraction_threads - 1,
                                                  [this](int worker) { pin_thread(cpus_, 4 + worker); })
                   : nullptr),
         extractor_(config, pool_.get()),
         estimator_(config),
         capture_clock_(config, gyro) {
     check_cpus_allowed(cpus_);
-    // USB hot-plug tells when a sensor comes back sooner than the next re-open attempt would.
-    if (feed.live()) usb_ = std::make_unique<UsbWatcher>();
     for (std::size_t i = 0; i < kProcessedSlots; ++i) free_.push(static_cast<int>(i));
   }
 
   RealtimeStats go(const std::atomic<bool>& stop) {
     std::vector<std::thread> threads;
     threads.emplace_back([this] { guarded(Role::Capture, [this] { capture(); }); });
-    if (config_.runtime.processing_threads == 2) {
+    if (runtime_.processing_threads == 2) {
       threads.emplace_back([this] { guarded(Role::Extraction, [this] { extraction(); }); });
       threads.emplace_back([this] { guarded(Role::Estimation, [this] { estimation(); }); });
     } else {
@@ -156,7 +155,11 @@ class Run {
       if (state == FeedState::Lost) {
         ++stats_.sensor_losses;
         message("sensor lost: " + problem);
-        if (!reopen_sensor()) break;
+        std::string why;
+        if (!feed_.wait_for_return(stopping_, why)) {
+          if (!why.empty() && !stopping_) message(why);
+          break;
+        }
         ++stats_.reopens;
         message("sensor back: " + feed_.description() + "; odometry restarts (reset)");
         after_gap = true;
@@ -170,24 +173,6 @@ class Run {
       if (!mailbox_.publish()) break;
     }
     mailbox_.close();
-  }
-
-  // Tries to re-open every reconnect_interval_ms until it works, the timeout passes or a stop.
-  bool reopen_sensor() {
-    const double timeout_s = config_.sensor.reconnect_timeout_s;
-    if (timeout_s == 0) return false;
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                                             timeout_s < 0 ? 1e9 : timeout_s));
-    std::string problem;
-    while (!stopping_ && Clock::now() < deadline) {
-      if (feed_.reopen(problem)) return true;
-      const auto until = Clock::now() + std::chrono::milliseconds(config_.sensor.reconnect_interval_ms);
-      const std::uint64_t arrivals = usb_ ? usb_->arrivals() : 0;
-      while (!stopping_ && Clock::now() < until && (!usb_ || usb_->arrivals() == arrivals))
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (!stopping_) message("sensor did not come back within " + std::to_string(timeout_s) + " s: " + problem);
-    return false;
   }
 
   // --- processing threads ---------------------------------------------------------------
@@ -278,18 +263,14 @@ class Run {
   void output() {
     pin_thread(cpus_, 3);
     auto next_status = Clock::now() + kStatusPeriod;
-    std::uint64_t frames_at_status = 0, usb_departures = 0;
+    std::uint64_t frames_at_status = 0;
     SensorEstimates learnt;  // as of the last good pair
     CaptureTiming timing;    // as of the last pair
-    if (usb_ && !usb_->problem().empty()) on_message_(usb_->problem());
     for (;;) {
       auto item = outputs_.pop_for(kPoll);
       flush_messages();
       if (on_tick_) on_tick_();
-      if (usb_ && usb_->departures() != usb_departures) {
-        usb_departures = usb_->departures();
-        on_message_("USB: an RGB-D sensor left the bus");
-      }
+      for (std::string news = feed_.news(); !news.empty(); news = feed_.news()) on_message_(news);
       if (item) {
         ++stats_.frames;
         if (item->has_pair && PairEstimator::dropped_frame(item->result)) {
@@ -342,12 +323,12 @@ class Run {
   }
 
   const std::function<void()>& on_tick_;
-  const Config& config_;
+  const PipelineConfig& config_;
+  const RuntimeConfig& runtime_;
   const std::vector<int> cpus_;
   FrameFeed& feed_;
   const RealtimePipeline::OutputFn& on_output_;
   const RealtimePipeline::MessageFn& on_message_;
-  std::unique_ptr<UsbWatcher> usb_;
   FrameMailbox mailbox_;
   std::unique_ptr<WorkerPool> pool_;  // the extraction's helpers (before extractor_: outlives it)
   FrameExtractor extractor_;  // the extraction thread's
@@ -365,12 +346,13 @@ class Run {
 
 }  // namespace
 
-RealtimePipeline::RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message,
-                                   GyroFeed* gyro)
-    : config_(config), feed_(feed), gyro_(gyro), on_output_(std::move(on_output)), on_message_(std::move(on_message)) {}
+RealtimePipeline::RealtimePipeline(const PipelineConfig& config, const RuntimeConfig& runtime, FrameFeed& feed,
+                                   OutputFn on_output, MessageFn on_message, GyroFeed* gyro)
+    : config_(config), runtime_(runtime), feed_(feed), gyro_(gyro), on_output_(std::move(on_output)),
+      on_message_(std::move(on_message)) {}
 
 RealtimeStats RealtimePipeline::run(const std::atomic<bool>& stop) {
-  auto run = std::make_unique<Run>(config_, feed_, gyro_, on_output_, on_message_, on_tick_);
+  auto run = std::make_unique<Run>(config_, runtime_, feed_, gyro_, on_output_, on_message_, on_tick_);
   return run->go(stop);
 }
 

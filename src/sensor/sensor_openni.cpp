@@ -107,7 +107,186 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   std::int64_t to_host(std::uint64_t device_us) {
     return clock.to_host(static_cast<std::int64_t>(device_us) * 1000, steady_now_ns());
   }
+
+  // The colour frame next() is pairing: its image is in the caller's frame.
+  struct InHand {
+    bool have_colour = false;
+    std::int64_t t_ns = 0;
+  };
+
+  // --- the pairing policy: next() pairs each colour frame with the depth frame nearest in
+  // time within 20 ms, before or after it ---
+  int kept() const { return std::min(depth_count, kDepthHistory); }
+  bool depth_at_or_after(std::int64_t t) const;
+  DepthSlot* nearest_depth(std::int64_t t);
+  bool earlier_depth_is_nearest(std::int64_t t);
+  int wait_for_stream(openni::VideoStream** streams, int budget_ms);  // both streams
+  bool collect(cv::Mat& gray, InHand& hand, std::string& problem);
+  void store_depth(const openni::VideoFrameRef& frame, std::int64_t t);
+  bool take_colour(const openni::VideoFrameRef& frame, std::int64_t t, cv::Mat& gray, InHand& hand);
+  void take_pending(cv::Mat& gray, InHand& hand);
+  void deliver(RgbdFrame& out, std::int64_t colour_t);
 };
+
+bool OpenNiSource::Impl::depth_at_or_after(std::int64_t t) const {
+  for (int k = 0; k < kept(); ++k)
+    if (depth_history[static_cast<size_t>(k)].t_ns >= t) return true;
+  return false;
+}
+
+OpenNiSource::Impl::DepthSlot* OpenNiSource::Impl::nearest_depth(std::int64_t t) {
+  DepthSlot* best = nullptr;
+  for (int k = 0; k < kept(); ++k) {
+    auto& slot = depth_history[static_cast<size_t>(k)];
+    if (!best || std::llabs(slot.t_ns - t) < std::llabs(best->t_ns - t)) best = &slot;
+  }
+  return best && std::llabs(best->t_ns - t) <= kMaxColourDepthOffsetNs ? best : nullptr;
+}
+
+// The depth frame in hand before colour time t is the nearest for good when the stream's next
+// one, due a depth interval after the newest, would be farther: no need to wait for it (at
+// 30 Hz that wait is most of a frame's latency when depth leads colour).
+bool OpenNiSource::Impl::earlier_depth_is_nearest(std::int64_t t) {
+  if (kept() < 2) return false;
+  // The stream's period: the shortest interval between kept frames (one the sensor skipped
+  // makes a double one, which must not push the next frame's estimate out). Four frames at
+  // most: every pair is compared.
+  std::int64_t period = std::numeric_limits<std::int64_t>::max(), newest = 0;
+  for (int i = 0; i < kept(); ++i) {
+    const std::int64_t ti = depth_history[static_cast<size_t>(i)].t_ns;
+    newest = i == 0 ? ti : std::max(newest, ti);
+    for (int j = i + 1; j < kept(); ++j) {
+      const std::int64_t gap = std::llabs(ti - depth_history[static_cast<size_t>(j)].t_ns);
+      if (gap > 0) period = std::min(period, gap);
+    }
+  }
+  if (period > 4 * kMaxColourDepthOffsetNs) return false;  // no estimate
+  const std::int64_t next_due = newest + period;
+  const DepthSlot* best = nearest_depth(t);
+  return best && best->t_ns <= t && t - best->t_ns <= next_due - t;
+}
+
+// One wait for any stream, in slices (one wait for a recording, see `playback`): the ready
+// stream's index; -1: the budget ran out, -2: interrupted or unplugged. Frames that arrived
+// before an unplug are still read: they are as good as any other (the virtual sensor unplugs
+// itself right after the last frame of its recording).
+int OpenNiSource::Impl::wait_for_stream(openni::VideoStream** streams, int budget_ms) {
+  if (playback) {
+    if (interrupted) return -2;
+    int ready = -1;
+    return openni::OpenNI::waitForAnyStream(streams, 2, &ready, budget_ms) == openni::STATUS_OK ? ready : -1;
+  }
+  for (int waited = 0; waited < budget_ms; waited += kWaitSliceMs) {
+    if (interrupted) return -2;
+    int ready = -1;
+    if (unplugged) return openni::OpenNI::waitForAnyStream(streams, 2, &ready, 0) == openni::STATUS_OK ? ready : -2;
+    if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, std::min(kWaitSliceMs, budget_ms - waited)) ==
+        openni::STATUS_OK)
+      return ready;
+  }
+  return -1;
+}
+
+// Collects frames until a colour frame is in hand and a depth frame at or after it has arrived
+// (the nearest depth can come up to 17 ms after its colour frame), the next colour frame
+// arrives with the nearest depth already in hand, or the wait runs out. false: next() has
+// nothing to deliver (`problem` says why).
+bool OpenNiSource::Impl::collect(cv::Mat& gray, InHand& hand, std::string& problem) {
+  openni::VideoStream* streams[2] = {&colour, &depth};
+  openni::VideoFrameRef frame;
+  while (!(hand.have_colour && (depth_at_or_after(hand.t_ns) || earlier_depth_is_nearest(hand.t_ns)))) {
+    // A recording holds its next depth frame unless all were read: wait for it as for any frame,
+    // so that pairing never depends on how fast the player decodes.
+    if (hand.have_colour && playback && depth_count >= depth_frames_in_file) break;
+    const int ready =
+        wait_for_stream(streams, hand.have_colour && !playback ? options.pairing_wait_ms : options.frame_timeout_ms);
+    if (ready == -2) {
+      if (hand.have_colour && !interrupted) break;  // unplugged: the frame in hand goes out first
+      problem = unplugged ? "the sensor was disconnected" : "interrupted";
+      return false;
+    }
+    if (ready < 0) {
+      if (hand.have_colour) break;  // no later depth: pair with what there is
+      problem = "no frame from the sensor for " + std::to_string(options.frame_timeout_ms) + " ms (unplugged?)";
+      return false;
+    }
+    if (streams[ready]->readFrame(&frame) != openni::STATUS_OK) continue;
+    const std::int64_t t = to_host(frame.getTimestamp());
+    if (ready == 1) {
+      store_depth(frame, t);
+      continue;
+    }
+    if (take_colour(frame, t, gray, hand)) break;
+  }
+  return true;
+}
+
+void OpenNiSource::Impl::store_depth(const openni::VideoFrameRef& frame, std::int64_t t) {
+  auto& slot = depth_history[static_cast<size_t>(depth_count++ % kDepthHistory)];
+  slot.t_ns = t;
+  const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
+                    static_cast<size_t>(frame.getStrideInBytes()));
+  depth_to_metres(raw, depth_m_per_unit, slot.depth_m);
+}
+
+// A colour frame read: the one in hand if there was none, else kept behind it. true: the
+// collecting is over (the depth nearest the frame in hand is there).
+bool OpenNiSource::Impl::take_colour(const openni::VideoFrameRef& frame, std::int64_t t, cv::Mat& gray,
+                                     InHand& hand) {
+  const int index = frame.getFrameIndex();
+  if (last_colour_index >= 0 && index > last_colour_index + 1) dropped += index - last_colour_index - 1;
+  if (last_colour_index < 0 && !playback) dropped += frames_numbered_before(index, options.fps);
+  last_colour_index = index;
+  const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
+                    static_cast<size_t>(frame.getStrideInBytes()));
+  ++colour_frames_read;
+  if (!hand.have_colour) {
+    colour_to_gray(rgb, true, gray);
+    hand = {true, t};
+    return false;
+  }
+  // A newer colour frame while the one in hand waits for a depth at or after it. It is kept
+  // for the next call, never replaces the one in hand: the depth nearest in time may be the
+  // one before (the sensor's streams lead and lag each other by up to half a frame).
+  if (has_pending) {
+    // Already one waiting behind it: the frame in hand had two frame times to get a depth
+    // and did not. Given up and counted, so that no frame goes unseen.
+    ++replaced;
+    cv::swap(gray, pending_gray);
+    hand.t_ns = pending_t_ns;
+  }
+  colour_to_gray(rgb, true, pending_gray);
+  pending_t_ns = t;
+  has_pending = true;
+  // A depth frame within 20 ms is in hand: one still to come would be later than this
+  // newer colour frame's arrival, and no nearer.
+  return nearest_depth(hand.t_ns) != nullptr;
+}
+
+// The frame kept behind the one in hand becomes the one in hand.
+void OpenNiSource::Impl::take_pending(cv::Mat& gray, InHand& hand) {
+  cv::swap(gray, pending_gray);
+  hand = {true, pending_t_ns};
+  has_pending = false;
+}
+
+void OpenNiSource::Impl::deliver(RgbdFrame& out, std::int64_t colour_t) {
+  out.t_colour_ns = colour_t;
+  out.host_lead_ns = clock.lead_ns();  // as proved by every frame read so far, this one's depth too
+  out.status = Status::Ok;
+  out.problem.clear();
+  const DepthSlot* best = nearest_depth(colour_t);
+  if (!best) {
+    out.t_depth_ns = colour_t;
+    out.status = Status::NoDepth;
+    out.problem = "no depth frame within 20 ms of the colour frame";
+    // The status says there is none; the buffer is kept for the next frame (releasing a 1.2-MB
+    // image and allocating it again moves glibc's mmap threshold, and the heap grows for it).
+    return;
+  }
+  out.t_depth_ns = best->t_ns;
+  best->depth_m.copyTo(out.depth_m);
+}
 
 std::vector<DeviceDescription> list_openni_devices() {
   initialise_openni();
@@ -211,161 +390,21 @@ std::string OpenNiSource::description() const {
 
 bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   auto& s = *impl_;
-  openni::VideoStream* streams[] = {&s.colour, &s.depth};
-  openni::VideoFrameRef frame;
-  const auto kept = [&] { return std::min(s.depth_count, kDepthHistory); };
-  const auto depth_at_or_after = [&](std::int64_t t) {
-    for (int k = 0; k < kept(); ++k)
-      if (s.depth_history[static_cast<size_t>(k)].t_ns >= t) return true;
-    return false;
-  };
-  const auto nearest_depth = [&](std::int64_t t) -> Impl::DepthSlot* {
-    Impl::DepthSlot* best = nullptr;
-    for (int k = 0; k < kept(); ++k) {
-      auto& slot = s.depth_history[static_cast<size_t>(k)];
-      if (!best || std::llabs(slot.t_ns - t) < std::llabs(best->t_ns - t)) best = &slot;
-    }
-    return best && std::llabs(best->t_ns - t) <= kMaxColourDepthOffsetNs ? best : nullptr;
-  };
-  // The depth frame in hand before colour time t is the nearest for good when the stream's next
-  // one, due a depth interval after the newest, would be farther: no need to wait for it (at
-  // 30 Hz that wait is most of a frame's latency when depth leads colour).
-  const auto earlier_depth_is_nearest = [&](std::int64_t t) {
-    if (kept() < 2) return false;
-    // The stream's period: the shortest interval between kept frames (one the sensor skipped
-    // makes a double one, which must not push the next frame's estimate out). Four frames at
-    // most: every pair is compared.
-    std::int64_t period = std::numeric_limits<std::int64_t>::max(), newest = 0;
-    for (int i = 0; i < kept(); ++i) {
-      const std::int64_t ti = s.depth_history[static_cast<size_t>(i)].t_ns;
-      newest = i == 0 ? ti : std::max(newest, ti);
-      for (int j = i + 1; j < kept(); ++j) {
-        const std::int64_t gap = std::llabs(ti - s.depth_history[static_cast<size_t>(j)].t_ns);
-        if (gap > 0) period = std::min(period, gap);
-      }
-    }
-    if (period > 4 * kMaxColourDepthOffsetNs) return false;  // no estimate
-    const std::int64_t next_due = newest + period;
-    const Impl::DepthSlot* best = nearest_depth(t);
-    return best && best->t_ns <= t && t - best->t_ns <= next_due - t;
-  };
-  bool have_colour = false;
-  std::int64_t colour_t = 0;
-  if (s.has_pending) {  // the frame that came while the last one waited: this call's
-    cv::swap(out.gray, s.pending_gray);
-    colour_t = s.pending_t_ns;
-    have_colour = true;
-    s.has_pending = false;
-  }
-  // One wait for any stream, in slices (one wait for a recording, see Impl::playback); -1: the
-  // budget ran out, -2: interrupted or unplugged.
-  // Frames that arrived before an unplug are still read: they are as good as any other (the
-  // virtual sensor unplugs itself right after the last frame of its recording).
-  const auto wait_for_stream = [&](int budget_ms) {
-    if (s.playback) {
-      if (s.interrupted) return -2;
-      int ready = -1;
-      return openni::OpenNI::waitForAnyStream(streams, 2, &ready, budget_ms) == openni::STATUS_OK ? ready : -1;
-    }
-    for (int waited = 0; waited < budget_ms; waited += kWaitSliceMs) {
-      if (s.interrupted) return -2;
-      int ready = -1;
-      if (s.unplugged)
-        return openni::OpenNI::waitForAnyStream(streams, 2, &ready, 0) == openni::STATUS_OK ? ready : -2;
-      if (openni::OpenNI::waitForAnyStream(streams, 2, &ready, std::min(kWaitSliceMs, budget_ms - waited)) ==
-          openni::STATUS_OK)
-        return ready;
-    }
-    return -1;
-  };
-  // Collect until a colour frame is in hand and a depth frame at or after it has arrived
-  // (the nearest depth can come up to 17 ms after its colour frame), the next colour frame
-  // arrives with the nearest depth already in hand, or the wait runs out. The colour frame is
-  // paired with the depth frame nearest in time within 20 ms, before or after it.
-  if (!have_colour && s.playback && s.colour_frames_read >= s.colour_frames_in_file) {
+  Impl::InHand hand;
+  if (s.has_pending) s.take_pending(out.gray, hand);  // the frame that came while the last one waited
+  if (!hand.have_colour && s.playback && s.colour_frames_read >= s.colour_frames_in_file) {
     problem = "all " + std::to_string(s.colour_frames_in_file) + " colour frames of the file read";
     return false;
   }
   for (;;) {
-    while (!(have_colour && (depth_at_or_after(colour_t) || earlier_depth_is_nearest(colour_t)))) {
-      // A recording holds its next depth frame unless all were read: wait for it as for any frame,
-      // so that pairing never depends on how fast the player decodes.
-      if (have_colour && s.playback && s.depth_count >= s.depth_frames_in_file) break;
-      const int ready = wait_for_stream(have_colour && !s.playback ? s.options.pairing_wait_ms
-                                                                    : s.options.frame_timeout_ms);
-      if (ready == -2) {
-        if (have_colour && !s.interrupted) break;  // unplugged: the frame in hand goes out first
-        problem = s.unplugged ? "the sensor was disconnected" : "interrupted";
-        return false;
-      }
-      if (ready < 0) {
-        if (have_colour) break;  // no later depth: pair with what there is
-        problem = "no frame from the sensor for " + std::to_string(s.options.frame_timeout_ms) + " ms (unplugged?)";
-        return false;
-      }
-      if (streams[ready]->readFrame(&frame) != openni::STATUS_OK) continue;
-      const std::int64_t t = s.to_host(frame.getTimestamp());
-      if (ready == 1) {
-        auto& slot = s.depth_history[static_cast<size_t>(s.depth_count++ % kDepthHistory)];
-        slot.t_ns = t;
-        const cv::Mat raw(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
-                          static_cast<size_t>(frame.getStrideInBytes()));
-        depth_to_metres(raw, s.depth_m_per_unit, slot.depth_m);
-        continue;
-      }
-      const int index = frame.getFrameIndex();
-      if (s.last_colour_index >= 0 && index > s.last_colour_index + 1) s.dropped += index - s.last_colour_index - 1;
-      if (s.last_colour_index < 0 && !s.playback) s.dropped += frames_numbered_before(index, s.options.fps);
-      s.last_colour_index = index;
-      const cv::Mat rgb(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
-                        static_cast<size_t>(frame.getStrideInBytes()));
-      ++s.colour_frames_read;
-      if (!have_colour) {
-        colour_to_gray(rgb, true, out.gray);
-        have_colour = true;
-        colour_t = t;
-        continue;
-      }
-      // A newer colour frame while the one in hand waits for a depth at or after it. It is kept
-      // for the next call, never replaces the one in hand: the depth nearest in time may be the
-      // one before (the sensor's streams lead and lag each other by up to half a frame).
-      if (s.has_pending) {
-        // Already one waiting behind it: the frame in hand had two frame times to get a depth
-        // and did not. Given up and counted, so that no frame goes unseen.
-        ++s.replaced;
-        cv::swap(out.gray, s.pending_gray);
-        colour_t = s.pending_t_ns;
-      }
-      colour_to_gray(rgb, true, s.pending_gray);
-      s.pending_t_ns = t;
-      s.has_pending = true;
-      // A depth frame within 20 ms is in hand: one still to come would be later than this
-      // newer colour frame's arrival, and no nearer.
-      if (nearest_depth(colour_t)) break;
-    }
+    if (!s.collect(out.gray, hand, problem)) return false;
     // No depth within 20 ms for the frame in hand, and a newer frame waits behind it: give the
     // older one up (counted) rather than send a frame without depth, which fails two pairs.
-    if (nearest_depth(colour_t) || !s.has_pending) break;
+    if (s.nearest_depth(hand.t_ns) || !s.has_pending) break;
     ++s.replaced;
-    cv::swap(out.gray, s.pending_gray);
-    colour_t = s.pending_t_ns;
-    s.has_pending = false;
+    s.take_pending(out.gray, hand);
   }
-  out.t_colour_ns = colour_t;
-  out.host_lead_ns = s.clock.lead_ns();  // as proved by every frame read so far, this one's depth too
-  out.status = Status::Ok;
-  out.problem.clear();
-  const Impl::DepthSlot* best = nearest_depth(colour_t);
-  if (!best) {
-    out.t_depth_ns = colour_t;
-    out.status = Status::NoDepth;
-    out.problem = "no depth frame within 20 ms of the colour frame";
-    // The status says there is none; the buffer is kept for the next frame (releasing a 1.2-MB
-    // image and allocating it again moves glibc's mmap threshold, and the heap grows for it).
-    return true;
-  }
-  out.t_depth_ns = best->t_ns;
-  best->depth_m.copyTo(out.depth_m);
+  s.deliver(out, hand.t_ns);
   return true;
 }
 

@@ -5,8 +5,8 @@
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "rgbd_odometry/core/config.hpp"
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace rgbdo;

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "fuzz_input.hpp"
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace rgbdo;

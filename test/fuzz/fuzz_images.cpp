@@ -11,7 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "fuzz_input.hpp"
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
 

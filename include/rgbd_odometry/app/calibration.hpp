@@ -15,10 +15,11 @@
 //    (the alignment's trust), so that the next run does not spend its first pairs learning
 //    them again.
 // Measured on ICL-NUIM kt3, calibrated on images 0-49 and run on 50-99: pair RPE 0.78 ->
-// 0.067 mm, pair NEES (no allowance) 3.81 -> 5.53 (src/pipeline/README.md).
+// 0.067 mm, pair NEES (no allowance) 3.81 -> 5.53
+// (src/pipeline/MEASUREMENTS.md#calibration-against-ground-truth-optional).
 #include <string>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/core/sensor_estimates.hpp"
 #include "rgbd_odometry/eval/evaluate.hpp"
 

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <iosfwd>
 
-#include "rgbd_odometry/runtime/realtime.hpp"
+#include "rgbd_odometry/core/pair_output.hpp"
 
 namespace rgbdo {
 

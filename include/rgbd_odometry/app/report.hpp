@@ -8,6 +8,7 @@
 
 #include "rgbd_odometry/core/pair_result.hpp"
 #include "rgbd_odometry/eval/evaluate.hpp"
+#include "rgbd_odometry/app/config.hpp"
 #include "rgbd_odometry/runtime/realtime.hpp"
 
 namespace rgbdo {

@@ -1,5 +1,5 @@
 #pragma once
-// The project's outputs on disk: the odometry log (shared/docs/odometry-csv.md, one row per
+// The project's outputs on disk: the odometry log (src/io/LOG_FORMAT.md, one row per
 // colour-frame pair, failed pairs included) and the integrated trajectory in TUM format.
 #include <Eigen/Geometry>
 #include <cstdint>

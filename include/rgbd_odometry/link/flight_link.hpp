@@ -18,7 +18,8 @@
 #include <thread>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/core/camera_mount.hpp"
+#include "rgbd_odometry/link/link_config.hpp"
 #include "rgbd_odometry/link/autopilot_gyro.hpp"
 #include "rgbd_odometry/link/autopilot_watch.hpp"
 #include "rgbd_odometry/link/mavlink.hpp"
@@ -41,7 +42,7 @@ struct LinkReceiveStats {
 class FlightLink {
  public:
   // Opens link.uri and starts receiving; throws LinkError naming the problem (a bad device path, say).
-  explicit FlightLink(const Config& config);
+  FlightLink(const LinkConfig& config, const BodyConfig& body);
   ~FlightLink();  // stops the receiver (within one receive timeout)
   FlightLink(const FlightLink&) = delete;
   FlightLink& operator=(const FlightLink&) = delete;

@@ -17,7 +17,7 @@
 #include <opencv2/core/types.hpp>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 
 namespace rgbdo {

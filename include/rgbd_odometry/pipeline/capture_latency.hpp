@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/gyro.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
 
@@ -128,7 +128,7 @@ struct MeasuredLatencySigmas {
 class CaptureClock {
  public:
   // feed: the gyro's samples (live: the autopilot's; a replay: imu.txt), null for none.
-  CaptureClock(const Config& config, GyroFeed* feed);
+  CaptureClock(const PipelineConfig& config, GyroFeed* feed);
 
   // What the covariance should carry instead of covariance.colour_latency_sigma_s: the colour
   // latency's standard error, the axes' spread and what is not applied yet; nullopt while the

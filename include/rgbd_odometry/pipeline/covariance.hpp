@@ -4,7 +4,7 @@
 // pair of clouds is aligned again, and the unbiased sample covariance of the N parameter
 // vectors xi = (t, rotation vector) is the estimate, multiplied by the configured scale.
 //
-// Each point is perturbed with its own noise (core/noise_model.hpp: the physical model by
+// Each point is perturbed with its own noise (pipeline/noise_model.hpp: the physical model by
 // default, the paper's for comparison). All N perturbations are generated and accumulated
 // together by the active SIMD kernel (rgbd_odometry/simd/perturb.hpp: vectorised Gaussian
 // noise, structure-of-arrays weighted sums of the centred clouds), then each perturbation's
@@ -35,9 +35,9 @@
 #include <vector>
 
 #include "rgbd_odometry/simd/kernels.hpp"
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/rng.hpp"
 
 namespace rgbdo {
@@ -77,6 +77,17 @@ class PerturbationCovariance {
 
  private:
   void reserve(int points);
+  // The steps of estimate(): both clouds centred on their weighted centroids into the
+  // structure of arrays (sigmas times noise_scale), each perturbation's cell weights drawn,
+  // the batch kernel's sums and a fit per perturbation into samples_.
+  struct Centres {
+    Eigen::Vector3d prev = Eigen::Vector3d::Zero(), curr = Eigen::Vector3d::Zero();
+  };
+  Centres centre_clouds(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                        const std::vector<PointNoise>& prev_noise, const std::vector<PointNoise>& curr_noise,
+                        double noise_scale);
+  void draw_cell_weights(std::span<const std::uint16_t> cells, Rng& rng);
+  bool fit_perturbations(const Centres& centres, Rng& rng);
   // d xi / d t of a capture-time error of one frame's depths (moved along their rays).
   Vector6d timing_gradient(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                            const std::vector<PointNoise>& noise, bool of_prev);

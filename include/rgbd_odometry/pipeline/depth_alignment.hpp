@@ -22,7 +22,7 @@
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/pipeline/learnt_constant.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
@@ -91,6 +91,19 @@ class DepthAligner {
   // noise geometry (both depths along their rays, seen along the normal).
   double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
 
+  // One Gauss-Newton step's sums at the current associations.
+  struct NormalEquations {
+    Matrix6d H = Matrix6d::Zero();
+    Vector6d b = Vector6d::Zero();
+    double s2 = 0;  // the a-posteriori variance factor
+    int used = 0;   // associations with weight
+  };
+  // The steps of align(): the associations at T (terms_, term_cells_; `it` the iteration), the
+  // robustly weighted sums over them (and each cell's gradient), the covariance from them.
+  void associate(const DepthCloud& curr, const Eigen::Isometry3d& T, int it, simd::AssociateInput& in);
+  NormalEquations weighted_normal_equations();
+  bool cluster_covariance(const NormalEquations& eq, DepthAlignment& out) const;
+
   simd::AssociateFn associate_;  // the active kernel set's
   // The associations at the last linearisation (the first term_count_) and each one's image cell.
   std::vector<simd::Association> terms_;
@@ -99,6 +112,7 @@ class DepthAligner {
   std::vector<float> scaled_;
   std::vector<Vector6d> cell_gradient_;
   std::vector<int> cell_count_;
+  int cell_grid_ = 1, cells_x_ = 1;  // grid samples a cell, cells a row
 };
 
 // How far the depth alignment's own covariance may be trusted on this sensor, learnt online

@@ -5,7 +5,7 @@
 #include <opencv2/core/mat.hpp>
 #include <opencv2/features2d.hpp>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/pipeline/features.hpp"
 #include "rgbd_odometry/pipeline/task_runner.hpp"
 

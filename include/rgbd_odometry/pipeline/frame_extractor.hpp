@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/status.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
@@ -30,7 +30,7 @@ class FrameExtractor {
  public:
   // config must have passed validate(); runner: where detection may split its work (null:
   // all on the calling thread; the result is the same).
-  explicit FrameExtractor(const Config& config, TaskRunner* runner = nullptr);
+  explicit FrameExtractor(const PipelineConfig& config, TaskRunner* runner = nullptr);
 
   // Overwrites `out`, reusing its buffers. A failed frame keeps its status and problem.
   void extract(const RgbdFrame& frame, ProcessedFrame& out);

@@ -1,8 +1,8 @@
 #pragma once
 // Stage 1b, our own: ORB-class keypoints and 256-bit steered binary descriptors, spread over
 // the image, with no heap allocation per frame after the first (features.detector: GRID_ORB).
-// OpenCV's ORB on the Odroid runs Debian's armhf build, which has no NEON (bench/README.md, ARM cost
-// model"); this extractor's hot loops are ours, so they can be.
+// OpenCV's ORB on the Odroid runs Debian's armhf build, which has no NEON
+// (bench/MEASUREMENTS.md#arm-cost-model); this extractor's hot loops are ours, so they can be.
 //
 //   pyramid       levels 1.. downscaled from the previous level by scale_factor, bilinear in
 //                 fixed point (weights in 1/256), pixel centres aligned: a vertical pass over
@@ -29,7 +29,7 @@
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/pipeline/features.hpp"
 #include "rgbd_odometry/pipeline/task_runner.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
@@ -90,6 +90,12 @@ class GridOrbExtractor {
     int first_keypoint = 0;            // where its keypoints start in the frame's list
   };
 
+  // The constructor's steps after the levels' sizes and budgets: each level's resampling from
+  // the one above it, the buffers detection fills (so that it never allocates), the pattern
+  // steered to every orientation step.
+  static void plan_resampling(Level& L, const Level& src, double step);
+  void reserve_detection_buffers();
+  void steer_pattern();
   void build_pyramid(const cv::Mat& gray);
   void build_box_sums(Level& level) const;
   void detect_level(Level& level, const cv::Mat& mask) const;

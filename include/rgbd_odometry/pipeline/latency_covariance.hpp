@@ -5,10 +5,12 @@
 // before it is stamped, and the colour and depth streams of an unsynchronised sensor (Kinect
 // v1, Xtion) are captured at different times. Against TUM's motion capture, fr1's Kinect
 // matches best with the colour taken 14-19 ms and the depth 39-42 ms before their stamps, at
-// every frame rate tried (`eval/evaluate`'s time offsets; src/pipeline/README.md). The colour's
+// every frame rate tried (`eval/evaluate`'s time offsets;
+// bench/MEASUREMENTS.md#covariance-consistency). The colour's
 // reading is the tilt rotations', into which the depth's lag leaks through the split of the image
-// motion; rz, which the depth does not enter, is on its stamps within a few ms (bench/README.md,
-// Drift over 1 s). The colour term covers that leak as measured. The per-frame
+// motion; rz, which the depth does not enter, is on its stamps within a few ms
+// (bench/MEASUREMENTS.md#drift-over-1-s-the-share-that-follows-the-change-of-rate). The colour term
+// covers that leak as measured. The per-frame
 // stamp jitter (covariance.timing_sigma_s) does not see such a latency: it is the same for
 // every frame. What it does:
 //  - colour, latency d_c: the pair measures the motion over [t_prev - d_c, t_curr - d_c]
@@ -34,7 +36,7 @@
 // part of the change of rate.
 #include <optional>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/geometry.hpp"
 
 namespace rgbdo {

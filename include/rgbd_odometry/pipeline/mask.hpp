@@ -4,7 +4,7 @@
 // detection, so no detector effort is spent where no 3-D point can be made.
 #include <opencv2/core/mat.hpp>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 
 namespace rgbdo {
 

@@ -3,7 +3,9 @@
 // Sec. III-A): a pair (i, j) survives when j is i's nearest neighbour and passes the ratio
 // test in the current frame, AND i is j's nearest neighbour and passes it in the previous.
 #include <Eigen/Core>
+#include <cmath>
 #include <opencv2/core/mat.hpp>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -45,6 +47,19 @@ class SymmetricMatcher {
                     std::span<const Eigen::Vector2d> curr_positions, double radius, std::vector<Match>& out);
 
  private:
+  // match_within's grid over the current keypoints' positions.
+  struct Grid {
+    double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+    double cell_w = 0, cell_h = 0;
+    int nx = 0, ny = 0;
+    // nullopt when no position is finite.
+    static std::optional<Grid> over(std::span<const Eigen::Vector2d> positions, double radius, int max_cells);
+    int cell_x(double x) const;  // -1 below the grid (or NaN), up to nx beyond it
+    int cell_y(double y) const;
+  };
+  void sort_by_cell(const Grid& grid, std::span<const Eigen::Vector2d> curr_positions);
+  int window_candidates(const Grid& grid, const Eigen::Vector2d& p, double radius);
+
   // The symmetric ratio test over prev_nn_ / curr_nn_, as filled by either search.
   void keep_mutual(int n_prev, bool binary, std::vector<Match>& out) const;
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <optional>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
 #include "rgbd_odometry/pipeline/frame.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
@@ -16,7 +16,7 @@ namespace rgbdo {
 
 class OdometryPipeline {
  public:
-  explicit OdometryPipeline(const Config& config);  // config must have passed validate()
+  explicit OdometryPipeline(const PipelineConfig& config);  // config must have passed validate()
 
   // The first frame returns nothing; each later one returns the (previous, this) pair.
   [[nodiscard]] std::optional<PairResult> process(const RgbdFrame& frame);

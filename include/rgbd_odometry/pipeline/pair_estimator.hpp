@@ -9,7 +9,7 @@
 #include <optional>
 #include <vector>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/capture_latency.hpp"
@@ -27,7 +27,7 @@ namespace rgbdo {
 
 class PairEstimator {
  public:
-  explicit PairEstimator(const Config& config);  // config must have passed validate()
+  explicit PairEstimator(const PipelineConfig& config);  // config must have passed validate()
 
   // The pair's random streams are seeded from the two frames' content and config.seed: the
   // same two frames give the same result in any run, at any place in it.
@@ -53,6 +53,25 @@ class PairEstimator {
   }
 
  private:
+  // The steps of estimate(), in order.
+  // The features' first fit into fit_: within the window the last pair's motion predicts,
+  // again over all pairs when that fails or finds too few inliers.
+  Status fit_features(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s, bool compensate,
+                      std::uint64_t pair_key, PairResult& r);
+  // The matched keypoints tracked below a pixel and fit_ refined on them (and on the depths
+  // carried with this pair's own motion); the current keypoints' geometry the rest uses.
+  const KeypointGeometry& track_and_refit(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s,
+                                          bool compensate, PairResult& r);
+  // fit_'s covariance from the perturbed inliers; false: it could not be estimated.
+  bool features_covariance(const ProcessedFrame& prev, const ProcessedFrame& curr,
+                           const KeypointGeometry& curr_geometry, double dt_s, std::uint64_t pair_key,
+                           Matrix6d& cov);
+  // refine_with_depth with what the pair reports of it and the features' rate kept.
+  void fuse_depth_alignment(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s, bool learn,
+                            const Vector6d& features_xi, Matrix6d& cov, PairResult& r);
+  // The capture latencies' terms (latency_covariance.hpp) added to cov; this pair becomes last_pair_.
+  void add_latency_terms(double dt_s, Matrix6d& cov);
+
   // Matching (within the window window_prior predicts, or over all pairs when null), 3-D
   // point pairs (depths carried to colour time with timing_prior, unless null) and RANSAC's
   // first fit into fit_; fills r's counts and adds to its times.
@@ -88,7 +107,7 @@ class PairEstimator {
   int refine_with_depth(const ProcessedFrame& prev, const ProcessedFrame& curr, double dt_s, bool learn,
                         Matrix6d& covariance, bool& depth_trusted);
 
-  Config config_;
+  PipelineConfig config_;
   bool paper_noise_;  // covariance.model "paper", decided once
   SensorNoise noise_;
   SensorNoise fit_noise_;  // the final fit's weights (fit_weight_noise)

@@ -10,7 +10,8 @@
 // sensor's depth noise is near zero; a pair whose Mahalanobis residual exceeds the chi^2(3)
 // 99 % point is then weighed down as Huber's loss does. Without that, a model that calls the
 // depth exact lets the few keypoints where it is not (corners) steer the fit: ICL-NUIM told its
-// true constants, 2.34 mm pair RPE against 0.35 mm with it (src/pipeline/README.md).
+// true constants, 2.34 mm pair RPE against 0.35 mm with it
+// (src/pipeline/MEASUREMENTS.md#huber-weights-where-the-model-is-wrong).
 //
 // Allocation-free: every buffer is sized at construction for `capacity` correspondences
 // (more only on the first larger input), the caller's RansacResult keeps its inlier buffer
@@ -21,8 +22,8 @@
 #include <vector>
 
 #include "rgbd_odometry/simd/kernels.hpp"
-#include "rgbd_odometry/core/config.hpp"
-#include "rgbd_odometry/core/noise_model.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
+#include "rgbd_odometry/pipeline/noise_model.hpp"
 #include "rgbd_odometry/core/rng.hpp"
 #include "rgbd_odometry/core/status.hpp"
 

@@ -14,7 +14,7 @@
 
 #include <opencv2/core/mat.hpp>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
@@ -23,7 +23,7 @@ namespace rgbdo {
 
 // Whether a pipeline so configured tracks its matched keypoints: matching.subpixel_tracking,
 // never under the paper's covariance model (its pipeline).
-inline bool tracks_keypoints(const Config& config) {
+inline bool tracks_keypoints(const PipelineConfig& config) {
   return config.matching.subpixel_tracking && config.covariance.model != "paper";
 }
 

@@ -9,33 +9,21 @@
 // runs while frame k is matched, fitted and its covariance sampled. Output (logs, link,
 // console) runs in order on its own thread, so a slow disk or terminal never stalls capture;
 // if it falls 64 results behind, estimation waits, and the newest-frame rule absorbs it.
-// A lost sensor is re-opened by the capture thread; the pair spanning the gap is reported
-// with status sensor_lost.
+// A lost sensor is waited for by the capture thread (the feed's own re-open policy,
+// sensor/reconnecting_feed.hpp); the pair spanning the gap is reported with status sensor_lost.
 #include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
+#include "rgbd_odometry/runtime/runtime_config.hpp"
 #include "rgbd_odometry/core/gyro.hpp"
-#include "rgbd_odometry/sensor/frame_feed.hpp"
+#include "rgbd_odometry/io/frame_feed.hpp"
 #include "rgbd_odometry/runtime/latency.hpp"
-#include "rgbd_odometry/core/pair_result.hpp"
+#include "rgbd_odometry/core/pair_output.hpp"
 
 namespace rgbdo {
-
-struct PairOutput {
-  bool has_pair = false;                  // false for the very first frame
-  PairResult result;                      // when has_pair
-  std::int64_t t_frame_ns = 0;            // colour capture time of the newer frame (its source's timeline)
-  std::int64_t t_depth_ns = 0;            // capture time of the depth image paired with it
-  std::int64_t host_lead_ns = 0;          // see RgbdFrame
-  std::int64_t t_frame_host_ns() const { return t_frame_ns - host_lead_ns; }  // as stamped in the pair
-  std::int64_t t_capture_host_ns = 0;     // steady clock, see CapturedFrame
-  int skipped = 0;                        // frames skipped between the pair's two frames
-  double latency_ms = 0;                  // capture to hand-over to the outputs
-  std::string frame_problem;              // the newer frame's failure, as the source put it
-};
 
 struct RealtimeStats {
   std::uint64_t frames = 0;    // processed
@@ -58,8 +46,8 @@ class RealtimePipeline {
   // lost / back, periodic status). Both are called on the output thread only. gyro: the
   // autopilot's rates (live) or the recording's imu.txt, against which the frames' capture
   // latency is measured and applied (pipeline/capture_latency.hpp); null: the stamps stand.
-  RealtimePipeline(const Config& config, FrameFeed& feed, OutputFn on_output, MessageFn on_message,
-                   GyroFeed* gyro = nullptr);
+  RealtimePipeline(const PipelineConfig& config, const RuntimeConfig& runtime, FrameFeed& feed, OutputFn on_output,
+                   MessageFn on_message, GyroFeed* gyro = nullptr);
   // Called on the output thread at least every 50 ms, frames or not (heartbeats, link news).
   void set_tick(std::function<void()> on_tick) { on_tick_ = std::move(on_tick); }
 
@@ -69,7 +57,8 @@ class RealtimePipeline {
   RealtimeStats run(const std::atomic<bool>& stop);
 
  private:
-  Config config_;
+  PipelineConfig config_;
+  RuntimeConfig runtime_;
   FrameFeed& feed_;
   GyroFeed* gyro_;
   OutputFn on_output_;

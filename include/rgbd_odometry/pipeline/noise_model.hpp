@@ -20,7 +20,7 @@
 #include <Eigen/Core>
 #include <cmath>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/pipeline/pipeline_config.hpp"
 
 namespace rgbdo {
 
@@ -52,7 +52,7 @@ inline PointNoise paper_point_noise(const Eigen::Vector3d& p, double depth_noise
   return n;
 }
 
-// The physical model's parameters (one home for each number: config.hpp).
+// The physical model's parameters (one home for each number: pipeline_config.hpp).
 struct SensorNoise {
   double depth_noise_coeff = CovarianceConfig{}.depth_noise_coeff;  // sigma_Z = c Z^2
   double pixel_sigma_px = CovarianceConfig{}.pixel_sigma_px;        // keypoint error at level 0
@@ -62,7 +62,7 @@ struct SensorNoise {
   double depth_rounding_sigma_m = 1.0 / (DepthConfig{}.units_per_m * std::sqrt(12.0));  // one unit, uniform
 };
 
-inline SensorNoise sensor_noise(const Config& c) {
+inline SensorNoise sensor_noise(const PipelineConfig& c) {
   return {c.covariance.depth_noise_coeff, c.covariance.pixel_sigma_px, c.features.orb_scale_factor,
           c.covariance.depth_lateral_sigma_px, c.camera.fx, c.camera.fy,
           1.0 / (c.depth.units_per_m * std::sqrt(12.0))};

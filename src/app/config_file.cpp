@@ -1,4 +1,4 @@
-#include "rgbd_odometry/io/config_file.hpp"
+#include "rgbd_odometry/app/config_file.hpp"
 
 #include <cstdio>
 
@@ -249,7 +249,8 @@ std::string config_yaml(const Config& config) {
 std::string config_reference_markdown() {
   std::ostringstream out;
   out << "# Configuration reference\n\n"
-         "Generated from the one table in `src/core/config.cpp` by `rgbd-odometry --print-config-reference`;\n"
+         "Generated from the keys each layer registers (put together in `src/app/config.cpp`) by\n"
+         "`rgbd-odometry --print-config-reference`;\n"
          "`test_config` keeps this file equal to it. A configuration file is YAML in OpenCV's FileStorage\n"
          "syntax (`%YAML:1.0`, then `---`), grouped by section; every key is optional, and an unknown key,\n"
          "a wrong type or a value out of range is refused at start-up with a message naming it. On the\n"

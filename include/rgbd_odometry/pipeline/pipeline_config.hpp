@@ -1,15 +1,13 @@
 #pragma once
-// The one typed configuration, grouped by pipeline stage. Loaded and validated once at
-// start-up (a YAML file through io/config_file.hpp, then command-line overrides); the hot
-// path only ever reads these fields.
+// The pipeline's settings, one struct a stage, and the keys they are set by (core/settings.hpp).
+// Loaded and validated once at start-up (app/config.hpp); the hot path only reads these fields.
 #include <array>
 #include <cstdint>
-#include <stdexcept>
-#include <optional>
 #include <string>
 #include <string_view>
-#include <variant>
-#include <vector>
+
+#include "rgbd_odometry/core/camera_mount.hpp"
+#include "rgbd_odometry/core/settings.hpp"
 
 namespace rgbdo {
 
@@ -112,7 +110,7 @@ inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "
 
 struct CovarianceConfig {
   int perturbations = 100;
-  // "physical" (core/noise_model.hpp: keypoint error by pyramid level, axial and lateral depth
+  // "physical" (pipeline/noise_model.hpp: keypoint error by pyramid level, axial and lateral depth
   // noise, capture-time error) or "paper" (Willis & Brink eq. 2 only, for comparison).
   std::string model = "physical";
   double depth_noise_coeff = 1.425e-3;  // sigma_Z = coeff * Z^2 (Khoshelham & Elberink 2012), 1/m
@@ -129,7 +127,7 @@ struct CovarianceConfig {
   // What the stamps get wrong in common, frame after frame (pipeline/latency_covariance.hpp):
   // sigma of the colour stream's capture latency behind its stamps, and of the depth stream's
   // behind the colour, seconds; 0: calibrated away. Against motion capture, TUM fr1's Kinect
-  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct (src/pipeline/README.md):
+  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct (src/pipeline/README.md#noise-model-and-covariance):
   // depth 25 ms. Its colour lags the stamps by 14-19 ms, a constant delay
   // a flight controller is told (PX4 EKF2_EV_DELAY, ArduPilot VISO_DELAY_MS) and which the
   // odometry only has to cover in part: colour 7.5 ms, half of it.
@@ -169,87 +167,8 @@ struct LatencyConfig {
   double mount_warning_deg = 5;
 };
 
-// A live OpenNI2 sensor (ignored for recorded sources).
-struct SensorConfig {
-  int fps = 30;
-  bool registration = true;     // hardware depth-to-colour registration (the paper's set-up)
-  int frame_timeout_ms = 2000;  // no frame for this long: the sensor is reported lost
-  int pairing_wait_ms = 70;     // how long a colour frame waits for its depth frame
-  // After a loss, try to re-open every reconnect_interval_ms for reconnect_timeout_s seconds
-  // (negative: for ever, as on the vehicle; 0: stop at the first loss).
-  double reconnect_timeout_s = -1;
-  int reconnect_interval_ms = 500;
-  std::string record_oni;  // non-empty: also record the sensor's streams to this .oni file
-};
-
-// The real-time pipeline's threads.
-struct LogConfig {
-  // The odometry log and trajectory files of this and earlier runs together (FILE, FILE.1,
-  // ...: io/rotating_file.hpp), in MB; the oldest runs' files go first. ~100 MB an hour at 30 Hz.
-  double max_total_mb = 1024;
-};
-
-struct RuntimeConfig {
-  // 1: extraction and pair estimation in one thread; 2: extraction of frame k+1 overlaps
-  // the matching/RANSAC/covariance of frame k.
-  int processing_threads = 2;
-  // Threads that extract one frame (GRID_ORB's pyramid levels split between them: the same
-  // result on any number): the extraction thread and extraction_threads - 1 helpers started
-  // once. On the XU3 the big cluster (CPUs 4-7) has room for 3 next to capture/estimation.
-  int extraction_threads = 1;
-  // CPUs to pin the threads to, "" for none. A comma list taken in the order capture,
-  // extraction, estimation, output (wrapping round), e.g. "4,5,6,7" for the XU3's A15 cores.
-  std::string cpu_affinity;
-};
-
-// Where the camera sits on the vehicle. The body frame is FRD (x forward, y right, z down);
-// with all zeros the camera looks forward along body x, its image x along body y (right) and
-// its image y along body z (down). The angles rotate the camera from that mount (Z-Y-X:
-// yaw about body z, then pitch, then roll), e.g. pitch -90 for a camera looking down.
-struct BodyConfig {
-  double camera_roll_deg = 0, camera_pitch_deg = 0, camera_yaw_deg = 0;
-  double camera_x_m = 0, camera_y_m = 0, camera_z_m = 0;  // camera position in the body frame
-};
-
-// The MAVLink 2 link to the flight computer (deploy/README.md).
-struct LinkConfig {
-  std::string uri;  // udp://HOST:PORT, udpin://[ADDR]:PORT or serial:///dev/ttyX[:BAUD]; empty: no link
-  int system_id = 1;  // the vehicle's: a companion computer shares its autopilot's system id
-  bool odometry = true;                 // send ODOMETRY (#331): PX4 EKF2, ArduPilot EKF3
-  bool vision_position_delta = false;   // send VISION_POSITION_DELTA (#11011): ArduPilot
-  double quality_sigma_fail_m = 0.02;   // frame-to-frame sigma_t at which quality reaches 1 %
-  // ArduPilot's EK3_VIS_VERR_MIN / _MAX: confidence maps onto that velocity-noise range.
-  double velocity_error_min_mps = 0.1;
-  double velocity_error_max_mps = 0.9;
-  // The autopilot followed (its HEARTBEAT): only this system id; 0 = the first one heard.
-  int autopilot_system_id = 0;
-  // No frame from the autopilot for this long: reported gone. Above the 1 s heartbeat period
-  // (PX4 and ArduPilot also send other streams) and short enough to tell within 2 s.
-  double autopilot_timeout_s = 1.5;
-  // Our TIMESYNC requests while an autopilot is up (the autopilot's own are always answered); 0: none.
-  double timesync_rate_hz = 1.0;
-  // Answers slower than this round trip are not used for the offset (error bound rtt/2).
-  double timesync_max_rtt_ms = 100;
-  // The EKF origin "LATITUDE_DEG, LONGITUDE_DEG, ALTITUDE_M" (WGS84, altitude AMSL), sent as
-  // SET_GPS_GLOBAL_ORIGIN and SET_HOME_POSITION once the autopilot is heard: ArduPilot's EKF3
-  // uses no external position without an origin. Empty: none sent. In a file also as a list
-  // [lat, lon, alt].
-  std::string ekf_origin;
-  // The followed autopilot's ATTITUDE asked for at this rate (MAV_CMD_SET_MESSAGE_INTERVAL),
-  // for its gyro rates (latency.*); 0: not asked, whatever it streams is used.
-  double attitude_rate_hz = 50;
-  // VISION_POSITION_DELTA: pairs composed until they span at least this long. ArduPilot's EKF3
-  // drops deltas closer together than its sensorIntervalMin_ms (50 ms, AP_NavEKF3).
-  double delta_min_interval_ms = 50;
-};
-
-// link.ekf_origin parsed: nullopt when empty; throws ConfigError naming the key otherwise.
-struct GeoPoint {
-  double latitude_deg = 0, longitude_deg = 0, altitude_m = 0;
-};
-std::optional<GeoPoint> parse_ekf_origin(const std::string& text);
-
-struct Config {
+// Every setting of the pipeline: what each stage and the capture-latency measurement read.
+struct PipelineConfig {
   CameraConfig camera;
   DepthConfig depth;
   FeatureConfig features;
@@ -258,52 +177,16 @@ struct Config {
   CovarianceConfig covariance;
   RefinementConfig refinement;
   LatencyConfig latency;
-  SensorConfig sensor;
-  RuntimeConfig runtime;
-  LogConfig log;
-  BodyConfig body;
-  LinkConfig link;
+  BodyConfig body;  // the camera's mount (core/camera_mount.hpp): the gyro's rates are the body's
   std::uint64_t seed = 1;  // with the two frames' content, seeds RANSAC and the perturbations (pair_estimator.cpp)
 };
 
-// A bad configuration value or file; the message names the key or file.
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-// One value as a configuration file holds it: a number or a text.
-using ConfigValue = std::variant<double, std::string>;
-
-// Sets "section.key" from a file's value after checking its type and range (ConfigError
-// naming the key); false when there is no such key.
-bool set_config_value(Config& config, const std::string& key, const ConfigValue& value);
-
-// Applies "section.key=value" overrides (the command line's), in order.
-void apply_overrides(Config& config, const std::vector<std::string>& assignments);
-
-// Every key a configuration file or override may set, for help texts and docs.
-std::vector<std::string> config_keys();
-
-// One key as the configuration reference (deploy/config/README.md) and --print-config show
-// it: all of it comes from the one table in config.cpp.
-struct ConfigKeyInfo {
-  enum class Kind { Number, Integer, Boolean, Text };
-  std::string key;    // "section.name" ("seed" has no section)
-  std::string unit;   // empty: none
-  std::string help;   // one line
-  std::string range;  // "[16, 8192]", "(0, 100]"; empty for booleans and texts
-  std::string value;  // in the configuration described, as a file writes it (texts unquoted)
-  Kind kind = Kind::Number;
-};
-// Every key in the table's order (grouped by section), with config's values.
-std::vector<ConfigKeyInfo> describe_config(const Config& config);
-
-// Throws ConfigError naming the first invalid key. The syntax of link.uri is the link's
-// business (link/transport.hpp parse_link_uri), checked by the program at start-up.
-void validate(const Config& config);
-
-// runtime.cpu_affinity as CPU numbers; throws ConfigError on a malformed list.
-std::vector<int> parse_cpu_list(const std::string& text);
+// The keys camera.* to latency.*, in that order, into `table` (pointing into c).
+void add_pipeline_settings(PipelineConfig& c, SettingsTable& table);
+// The key `seed`.
+void add_seed_setting(PipelineConfig& c, SettingsTable& table);
+// Throws ConfigError naming the first key whose value does not fit the others (ranges are the
+// table's: check_ranges).
+void validate_pipeline(const PipelineConfig& c);
 
 }  // namespace rgbdo

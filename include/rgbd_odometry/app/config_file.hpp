@@ -2,7 +2,7 @@
 // The configuration as a file: YAML in OpenCV FileStorage syntax (deploy/config/*.yaml).
 #include <string>
 
-#include "rgbd_odometry/core/config.hpp"
+#include "rgbd_odometry/app/config.hpp"
 
 namespace rgbdo {
 
