@@ -46,13 +46,6 @@ Config configure(const RunOptions& options) {
   apply_overrides(config, options.overrides);
   if (!options.link.empty()) config.link.uri = options.link;
   validate(config);
-  if (!config.link.uri.empty()) {
-    try {
-      (void)parse_link_uri(config.link.uri);
-    } catch (const LinkError& e) {
-      throw ConfigError(std::string("config key 'link.uri': ") + e.what());
-    }
-  }
   return config;
 }
 

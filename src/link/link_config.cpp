@@ -1,5 +1,7 @@
 #include "rgbd_odometry/link/link_config.hpp"
 
+#include "rgbd_odometry/link/transport.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -37,6 +39,13 @@ void validate_link(const LinkConfig& c) {
         "motion twice (ODOMETRY as external navigation, VISION_POSITION_DELTA as body odometry) and PX4 reads no "
         "VISION_POSITION_DELTA: choose one (for ArduPilot's deltas set link.odometry: false)");
   (void)parse_ekf_origin(c.ekf_origin);
+  if (!c.uri.empty()) {
+    try {
+      (void)parse_link_uri(c.uri);
+    } catch (const LinkError& e) {
+      throw ConfigError(std::string("config key 'link.uri': ") + e.what());
+    }
+  }
 }
 
 std::optional<GeoPoint> parse_ekf_origin(const std::string& text) {

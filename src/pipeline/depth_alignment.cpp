@@ -190,16 +190,19 @@ void DepthAligner::associate(const DepthCloud& curr, const Eigen::Isometry3d& T,
   const bool last = it == config_.iterations - 1;
   in.step = last ? 1 : 2;
   term_count_ = 0;
+  // In registers: the stores into term_cells_ below could otherwise alias them.
+  const int cell_grid = cell_grid_, cells_x = cells_x_;
   for (int j = 0; j < curr.rows; ++j) {
     const int first = last ? 0 : ((j + it) & 1);
     in.first_index = j * curr.cols + first;
     in.curr = curr.point[static_cast<size_t>(in.first_index)].data();
     in.n = (curr.cols - first + in.step - 1) / in.step;
     const auto found = static_cast<size_t>(associate_(in, terms_.data() + term_count_));
-    const int cell_row = (j / cell_grid_) * cells_x_;
-    for (size_t k = term_count_; k < term_count_ + found; ++k)
-      term_cells_[k] = cell_row + (terms_[k].curr_index - j * curr.cols) / cell_grid_;
-    term_count_ += found;
+    const int cell_row = (j / cell_grid) * cells_x;
+    const size_t end = term_count_ + found;
+    for (size_t k = term_count_; k < end; ++k)
+      term_cells_[k] = cell_row + (terms_[k].curr_index - j * curr.cols) / cell_grid;
+    term_count_ = end;
   }
 }
 
@@ -215,8 +218,11 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   const double scale2 = 1.4826 * 1.4826 * static_cast<double>(*mid);
   const double cutoff2 = 4.685 * 4.685 * std::max(scale2, 1e-24);
 
-  NormalEquations eq;
+  // The sums in locals, not in the returned object: stores into cell_gradient_ and cell_count_
+  // could alias its fields and keep them out of registers.
   std::array<double, 21> h{};  // the lower triangle of H, row by row
+  Vector6d b = Vector6d::Zero();
+  int used = 0;
   std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
   std::fill(cell_count_.begin(), cell_count_.end(), 0);
   double sum_wr2 = 0, sum_weight = 0;
@@ -235,16 +241,19 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
     for (int row = 0, at = 0; row < 6; ++row)
       for (int col = 0; col <= row; ++col, ++at) h[static_cast<size_t>(at)] += w * J(row) * J(col);
     const double wr = w * term.r;
-    eq.b += wr * J;
+    b += wr * J;
     sum_wr2 += wr * term.r;
     sum_weight += robust;
     const auto cell = static_cast<size_t>(term_cells_[a]);
     cell_gradient_[cell] += wr * J;
     ++cell_count_[cell];
-    ++eq.used;
+    ++used;
   }
+  NormalEquations eq;
   for (int row = 0, at = 0; row < 6; ++row)
     for (int col = 0; col <= row; ++col, ++at) eq.H(row, col) = eq.H(col, row) = h[static_cast<size_t>(at)];
+  eq.b = b;
+  eq.used = used;
   eq.s2 = sum_wr2 / std::max(sum_weight - 6, 1.0);
   return eq;
 }

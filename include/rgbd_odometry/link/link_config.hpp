@@ -48,8 +48,8 @@ std::optional<GeoPoint> parse_ekf_origin(const std::string& text);
 
 
 void add_link_settings(LinkConfig& c, SettingsTable& table);
-// Throws ConfigError naming the first key whose value does not fit the others. The syntax of
-// link.uri is the transport's (link/transport.hpp parse_link_uri), checked by the program.
+// Throws ConfigError naming the first key whose value does not fit the others, link.uri
+// included (its syntax is the transport's: link/transport.hpp parse_link_uri).
 void validate_link(const LinkConfig& c);
 
 }  // namespace rgbdo

@@ -127,10 +127,10 @@ struct CovarianceConfig {
   // What the stamps get wrong in common, frame after frame (pipeline/latency_covariance.hpp):
   // sigma of the colour stream's capture latency behind its stamps, and of the depth stream's
   // behind the colour, seconds; 0: calibrated away. Against motion capture, TUM fr1's Kinect
-  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct (src/pipeline/README.md#noise-model-and-covariance):
-  // depth 25 ms. Its colour lags the stamps by 14-19 ms, a constant delay
-  // a flight controller is told (PX4 EKF2_EV_DELAY, ArduPilot VISO_DELAY_MS) and which the
-  // odometry only has to cover in part: colour 7.5 ms, half of it.
+  // v1 takes its depth 25-28 ms after its colour, which no consumer can correct
+  // (src/pipeline/README.md#noise-model-and-covariance): depth 25 ms. Its colour lags the stamps
+  // by 14-19 ms, a constant delay a flight controller is told (PX4 EKF2_EV_DELAY, ArduPilot
+  // VISO_DELAY_MS) and which the odometry only has to cover in part: colour 7.5 ms, half of it.
   double colour_latency_sigma_s = 0.0075;
   double depth_latency_sigma_s = 0.025;
   // The horizon over which a consumer integrating the reported motions should stay covered
