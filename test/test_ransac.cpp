@@ -235,6 +235,17 @@ TEST(Ransac, PureNoiseHasTooFewInliers) {
   EXPECT_NE(run(ransac, s.prev, s.curr, rng).status, Status::Ok);
 }
 
+TEST(Ransac, AdaptiveStopIsDefinedForEveryInlierCount) {
+  // A best hypothesis without one inlier (pure mismatches) once made the count -inf cast to int.
+  EXPECT_EQ(adaptive_hypotheses(0, 100, 200), 200);
+  EXPECT_EQ(adaptive_hypotheses(1, 1000, 200), 200);
+  EXPECT_EQ(adaptive_hypotheses(100, 100, 200), 1);
+  // Half inliers: 1 - 0.5^3 = 0.875 per draw fails; 0.875^k <= 0.001 at k = 52 (51.7).
+  EXPECT_EQ(adaptive_hypotheses(50, 100, 200), 52);
+  EXPECT_EQ(adaptive_hypotheses(50, 100, 40), 40);
+  EXPECT_EQ(adaptive_hypotheses(0, 0, 200), 200);
+}
+
 TEST(Ransac, FewerPairsThanMinimumFails) {
   const Scene s = make_scene(Eigen::Isometry3d::Identity(), 5, 0.0, 0.0, 13);
   RigidRansac ransac(paper_config(), SensorNoise{}, 1000);

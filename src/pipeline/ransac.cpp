@@ -21,6 +21,17 @@ constexpr double kHuberMahalanobis = 3.368;
 
 }  // namespace
 
+int adaptive_hypotheses(int inliers, int pairs, int cap) {
+  const double w = pairs > 0 ? static_cast<double>(inliers) / pairs : 0.0;
+  const double p_fail = 1.0 - w * w * w;
+  if (p_fail <= 1e-12) return 1;
+  // With no inlier yet (a best hypothesis that fits not even its own sample, as a frame pair
+  // of pure mismatches gives) log(p_fail) is 0 and the ratio infinite: draw them all.
+  if (!(p_fail < 1.0)) return cap;
+  const double k = std::log(1.0 - kSuccessProbability) / std::log(p_fail);
+  return k < cap ? static_cast<int>(std::ceil(k)) : cap;
+}
+
 RigidRansac::RigidRansac(const RansacConfig& ransac, const SensorNoise& noise, int capacity)
     : config_(ransac), noise_(noise), score_(simd::active_kernels().score_rigid) {
   const auto n = static_cast<size_t>(capacity);
@@ -177,15 +188,7 @@ int RigidRansac::sample_hypotheses(const std::vector<Eigen::Vector3d>& prev, con
       best_count = count;
       best_cost = cost;
       best = T;
-      if (!config_.adaptive_stop) continue;
-      const double w = static_cast<double>(count) / n;
-      const double p_fail = 1.0 - w * w * w;
-      if (p_fail <= 1e-12) {
-        needed = hypotheses;
-      } else {
-        const double k = std::log(1.0 - kSuccessProbability) / std::log(p_fail);
-        needed = std::min(config_.max_iterations, static_cast<int>(std::ceil(k)));
-      }
+      if (config_.adaptive_stop) needed = adaptive_hypotheses(count, n, config_.max_iterations);
     }
   }
   return hypotheses;

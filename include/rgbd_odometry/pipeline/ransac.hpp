@@ -42,6 +42,11 @@ struct PointPairCovariances {
   std::vector<Eigen::Matrix3d> prev, curr;
 };
 
+// How many hypotheses make drawing at least one all-inlier sample 99.9 % likely when the best
+// so far has `inliers` of `pairs`: 1 when all are inliers, `cap` when none is (or the count
+// would exceed it).
+int adaptive_hypotheses(int inliers, int pairs, int cap);
+
 class RigidRansac {
  public:
   RigidRansac(const RansacConfig& ransac, const SensorNoise& noise, int capacity);
