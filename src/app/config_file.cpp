@@ -259,7 +259,8 @@ std::string config_reference_markdown() {
          "`--config` reads that output back. Two more spellings in a file: `camera.distortion: [k1, k2,\n"
          "p1, p2, k3]` and `link.ekf_origin: [lat, lon, alt]`; and `camera.calibration_file` names an\n"
          "OpenCV calibration file (`camera_matrix`, `distortion_coefficients`) for the intrinsics.\n\n"
-         "Shipped: [`tum-fr1.yaml`](tum-fr1.yaml) (TUM RGB-D freiburg1 recordings) and\n"
+         "Shipped: [`tum-fr1.yaml`](tum-fr1.yaml) and [`tum-fr3.yaml`](tum-fr3.yaml) (TUM RGB-D freiburg1\n"
+         "and freiburg3 recordings), [`icl-nuim.yaml`](icl-nuim.yaml) (ICL-NUIM's rendered frames) and\n"
          "[`xtion.yaml`](xtion.yaml) (an Asus Xtion on the Odroid-XU3, installed by the package).\n\n"
          "| key | default | unit, range | what it does |\n| --- | --- | --- | --- |\n";
   for (const ConfigKeyInfo& k : describe_config(Config{})) {

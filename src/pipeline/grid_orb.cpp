@@ -76,6 +76,9 @@ const std::array<Direction, GridOrbExtractor::kAngleSteps>& directions() {
 // Rounds a / 65536 to the nearest integer, halves away from zero (exact integer arithmetic).
 inline int round_q16(std::int64_t a) { return static_cast<int>(a >= 0 ? (a + 32768) >> 16 : -((-a + 32768) >> 16)); }
 
+// A grid cell's state in a level's low-threshold fallback (Level::cell_has).
+constexpr int kHasCorner = 1, kSearchLow = 2;
+
 // Candidate order: corners at the full threshold first, then by score, then top to bottom,
 // left to right: a total order, so every build picks the same keypoints.
 inline bool better(int a_strong, int a_score, int a_y, int a_x, int b_strong, int b_score, int b_y, int b_x) {
@@ -236,8 +239,11 @@ void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
   candidates.clear();
 
   // The segment test at threshold t over [x_begin, x_end) x [y_begin, y_end) (the active SIMD
-  // kernel flags the corners), then each corner's mask and score; appends the corners.
-  const auto segment_test = [&](int t, int x_begin, int x_end, int y_begin, int y_end, bool strong) {
+  // kernel flags the corners), then each corner's mask and score; appends the corners. With
+  // `cells` (one row of the cell grid, its first cell at kBorder), only corners in cells marked
+  // kSearchLow there.
+  const auto segment_test = [&](int t, int x_begin, int x_end, int y_begin, int y_end, bool strong,
+                                const int* cells) {
     std::uint8_t* flags = L.flags.data();
     for (int y = y_begin; y < y_end; ++y) {
       const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
@@ -256,6 +262,7 @@ void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
         }
         if (flags[i] == 0) continue;
         const int x = x_begin + i;
+        if (cells != nullptr && cells[(x - kBorder) / L.cell_px] != kSearchLow) continue;
         // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
         if (mask_row[L.mask_x[static_cast<size_t>(x)]] == 0) continue;
         // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score),
@@ -280,24 +287,36 @@ void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
 
   const int x_begin = kBorder, x_end = w - kBorder, y_begin = kBorder, y_end = h - kBorder;
   if (x_end <= x_begin || y_end <= y_begin) return;
-  segment_test(config_.fast_threshold, x_begin, x_end, y_begin, y_end, true);
+  segment_test(config_.fast_threshold, x_begin, x_end, y_begin, y_end, true, nullptr);
   // A level with corners to spare (textured, sharp) keeps to the full threshold: measured on
   // fr1_xyz, its weak corners cost ~23 M ARM instructions per frame and made the odometry no
   // better. When blur or a bare scene leaves fewer than kFallbackMargin corners per keypoint
   // wanted, cells without a corner look again at the low threshold (ORB-SLAM's fallback).
   const auto nms = [&] { suppress_non_maxima(L); };
   if (candidates.size() >= static_cast<size_t>(kFallbackMargin * std::max(L.budget, 1))) return nms();
-  std::vector<int>& has = L.cell_has;
-  has.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), 0);
+  std::vector<int>& state = L.cell_has;
+  state.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), 0);
   for (const Candidate& c : candidates)
-    has[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)] = 1;
-  for (int cy = 0; cy < cells_y; ++cy)
+    state[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)] = kHasCorner;
+  // One segment test per row of cells, over the span from its first cell to search to its last
+  // (not one per cell: a bare scene searches nearly every cell, and the kernel's per-call and
+  // per-row-tail costs had made its corners 3.5x a textured frame's). At most a second pass
+  // over the level, whatever the scene.
+  for (int cy = 0; cy < cells_y; ++cy) {
+    int* row_cells = state.data() + static_cast<size_t>(cy) * static_cast<size_t>(cells_x);
+    const int yb = y_begin + cy * L.cell_px, ye = std::min(yb + L.cell_px, y_end);
+    int first = -1, last = -1;
     for (int cx = 0; cx < cells_x; ++cx) {
-      if (has[static_cast<size_t>(cy * cells_x + cx)] == 1) continue;
-      const int xb = x_begin + cx * L.cell_px, yb = y_begin + cy * L.cell_px;
-      const int xe = std::min(xb + L.cell_px, x_end), ye = std::min(yb + L.cell_px, y_end);
-      if (cell_in_mask(xb, xe, yb, ye)) segment_test(kFastLowThreshold, xb, xe, yb, ye, false);
+      const int xb = x_begin + cx * L.cell_px, xe = std::min(xb + L.cell_px, x_end);
+      if (row_cells[cx] == kHasCorner || !cell_in_mask(xb, xe, yb, ye)) continue;
+      row_cells[cx] = kSearchLow;
+      if (first < 0) first = cx;
+      last = cx;
     }
+    if (first < 0) continue;
+    segment_test(kFastLowThreshold, x_begin + first * L.cell_px, std::min(x_begin + (last + 1) * L.cell_px, x_end), yb,
+                 ye, false, row_cells);
+  }
 
   nms();
 }
