@@ -70,7 +70,7 @@ TEST(OpenNiSource, LiveOdometryEqualsTheReplayOfTheSameRecording) {
   // Every frame of the recording was read, or counted: a reader woken late on a loaded
   // machine loses the sensor's frame (a gap in its indices) or replaces a frame waiting for
   // its depth by the next one; never a frame unseen.
-  EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+  EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.colour_frames_without_depth()), 40u);
   ASSERT_GE(live.size(), 20u);
 
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
@@ -147,7 +147,7 @@ TEST(OpenNiSource, ARecordingPlaysBackThroughOniFile) {
     live = capture(source, problem);
     // The recorder takes every frame the sensor sends; a reader woken late on a loaded machine
     // may miss one (counted), the file does not.
-    EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+    EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.colour_frames_without_depth()), 40u);
   }
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
   ASSERT_EQ(seq.frames.size(), 40u);
@@ -192,7 +192,7 @@ TEST(OpenNiSource, DroppedFramesAreCountedFromFrameIndices) {
   const auto frames = capture(source, problem);
   // The three the sensor dropped, and any a reader woken late on a loaded machine missed.
   EXPECT_GE(source.dropped_colour_frames(), 3);
-  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.colour_frames_without_depth()), 40u);
 }
 
 TEST(OpenNiSource, FramesSentBeforeTheFirstReadAreCounted) {
@@ -208,7 +208,7 @@ TEST(OpenNiSource, FramesSentBeforeTheFirstReadAreCounted) {
   ASSERT_EQ(recorded.size(), frames.size()) << "live frames whose intervals match no run of recorded frames";
   ASSERT_GE(recorded.front(), 1u) << "the first frame read was the recording's first: nothing was lost to count";
   EXPECT_GE(static_cast<size_t>(source.dropped_colour_frames()), recorded.front());
-  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.colour_frames_without_depth()), 40u);
 }
 
 // The bundled recording with its depth stream moved by shift_ms (colour untouched) and every
@@ -252,8 +252,8 @@ void expect_nearest_depth_pairing(int shift_ms, const std::string& id) {
   // waited only for a depth frame after its colour gave up 6 of these 40 whenever the depth
   // stream skipped one); a reader woken late under a sanitiser loses a depth frame now and
   // then, and with it, rightly, the colour frame that had no other within 20 ms.
-  EXPECT_LE(source.replaced_colour_frames(), 2) << "colour frames given up while waiting for depth";
-  EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 40u);
+  EXPECT_LE(source.colour_frames_without_depth(), 2) << "colour frames given up while waiting for depth";
+  EXPECT_EQ(live.size() + static_cast<size_t>(source.dropped_colour_frames() + source.colour_frames_without_depth()), 40u);
   const TumSequence seq = open_tum_sequence(dir.string());
   const std::vector<TumImage> depth = read_tum_images(dir.string(), "depth.txt");
   const std::vector<size_t> recorded = recorded_index_of(live, seq);
@@ -291,7 +291,7 @@ TEST(OpenNiSource, AnUnpluggedSensorIsReportedAtOnceNotAfterTheTimeout) {
   const auto frames = capture(source, problem);
   const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // The ten frames before the unplug, each read or counted (a reader woken late under load).
-  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.replaced_colour_frames()), 10u);
+  EXPECT_EQ(frames.size() + static_cast<size_t>(source.dropped_colour_frames() + source.colour_frames_without_depth()), 10u);
   EXPECT_EQ(problem, "the sensor was disconnected");  // the event, not "no frame from the sensor for ..."
   EXPECT_LT(waited, options.frame_timeout_ms * 1e-3);
 }

@@ -98,7 +98,8 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   for (const auto& [word, n] : s.failures) out << " (" << word << ": " << n << ")";
   out << "\n";
   out << "  frames: " << run.frames << " processed, " << run.skipped << " skipped (processing behind), "
-      << run.dropped_by_sensor << " dropped by the sensor, " << run.stamp_not_increasing
+      << run.without_depth << " without a depth frame within 20 ms, " << run.dropped_by_sensor
+      << " dropped by the sensor, " << run.stamp_not_increasing
       << " dropped for a capture time not after the previous frame's; sensor lost " << run.sensor_losses
       << " times, re-opened " << run.reopens << " times\n";
   if (run.latency.count() > 0)

@@ -102,7 +102,8 @@ class Run {
     }
     for (auto& t : threads) t.join();
     stats_.failure = failure_;
-    stats_.skipped = mailbox_.skipped() + static_cast<std::uint64_t>(feed_.replaced_frames());
+    stats_.skipped = mailbox_.skipped();
+    stats_.without_depth = static_cast<std::uint64_t>(feed_.frames_without_depth());
     stats_.dropped_by_sensor = feed_.dropped_frames();
     return stats_;
   }
@@ -289,7 +290,8 @@ class Run {
       if (feed_.live() && Clock::now() >= next_status) {
         std::ostringstream s;
         s << std::fixed << std::setprecision(1) << "status: " << (stats_.frames - frames_at_status) / 10.0
-          << " frames/s, " << mailbox_.skipped() + static_cast<std::uint64_t>(feed_.replaced_frames()) << " skipped, " << feed_.dropped_frames()
+          << " frames/s, " << mailbox_.skipped() << " skipped, " << feed_.frames_without_depth() << " without depth, "
+          << feed_.dropped_frames()
           << " dropped by the sensor, latency median " << stats_.latency.quantile_ms(0.5) << " ms, p99 "
           << stats_.latency.quantile_ms(0.99) << " ms";
         if (learnt.depth_sigma_scale_t > 0) s << "; " << sensor_estimates_text(learnt);

@@ -48,7 +48,7 @@ FeedState OpenNiFeed::next(RgbdFrame& frame, std::string& problem) {
   }
   std::lock_guard<std::mutex> lock(mutex_);
   dropped_before_ += source_->dropped_colour_frames();
-  replaced_before_ += source_->replaced_colour_frames();
+  without_depth_before_ += source_->colour_frames_without_depth();
   source_.reset();  // release the device: a replugged sensor must be opened afresh
   return FeedState::Lost;
 }
@@ -86,9 +86,9 @@ int OpenNiFeed::dropped_frames() const {
   return dropped_before_ + (source_ ? source_->dropped_colour_frames() : 0);
 }
 
-int OpenNiFeed::replaced_frames() const {
+int OpenNiFeed::frames_without_depth() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return replaced_before_ + (source_ ? source_->replaced_colour_frames() : 0);
+  return without_depth_before_ + (source_ ? source_->colour_frames_without_depth() : 0);
 }
 
 }  // namespace rgbdo

@@ -85,7 +85,7 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   int last_colour_index = -1;
   // Read by other threads (the status line) while the capture thread counts: atomic.
   std::atomic<int> dropped{0};   // colour frame indices the sensor skipped, or numbered before the first read
-  std::atomic<int> replaced{0};  // colour frames given up: two newer ones came before their depth
+  std::atomic<int> without_depth{0};  // colour frames given up: no depth frame within 20 ms before newer ones came
   // A colour frame that arrived while the one before it waited for its depth: the next call's
   // frame (converted already).
   cv::Mat pending_gray;
@@ -251,7 +251,7 @@ bool OpenNiSource::Impl::take_colour(const openni::VideoFrameRef& frame, std::in
   if (has_pending) {
     // Already one waiting behind it: the frame in hand had two frame times to get a depth
     // and did not. Given up and counted, so that no frame goes unseen.
-    ++replaced;
+    ++without_depth;
     cv::swap(gray, pending_gray);
     hand.t_ns = pending_t_ns;
   }
@@ -375,7 +375,7 @@ OpenNiSource::~OpenNiSource() {
 
 int OpenNiSource::dropped_colour_frames() const { return impl_->dropped; }
 
-int OpenNiSource::replaced_colour_frames() const { return impl_->replaced; }
+int OpenNiSource::colour_frames_without_depth() const { return impl_->without_depth; }
 
 void OpenNiSource::interrupt() { impl_->interrupted = true; }
 
@@ -401,7 +401,7 @@ bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
     // No depth within 20 ms for the frame in hand, and a newer frame waits behind it: give the
     // older one up (counted) rather than send a frame without depth, which fails two pairs.
     if (s.nearest_depth(hand.t_ns) || !s.has_pending) break;
-    ++s.replaced;
+    ++s.without_depth;
     s.take_pending(out.gray, hand);
   }
   s.deliver(out, hand.t_ns);

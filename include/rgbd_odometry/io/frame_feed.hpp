@@ -39,10 +39,10 @@ class FrameFeed {
   virtual const GroundTruth* groundtruth() const { return nullptr; }
   virtual std::string description() const = 0;
   virtual int dropped_frames() const { return 0; }  // by the sensor, seen from frame indices
-  // Live frames the reader replaced by a newer one before it could deliver them (it fell
-  // behind, e.g. while waiting for a frame's depth): skipped, like frames the processing
-  // threads could not take. Thread-safe, as dropped_frames().
-  virtual int replaced_frames() const { return 0; }
+  // Live colour frames given up because no depth frame came within 20 ms of them before newer
+  // colour frames did (a sensor or recording that lost depth frames): counted apart from the
+  // frames the processing threads could not take. Thread-safe, as dropped_frames().
+  virtual int frames_without_depth() const { return 0; }
   // A recording's folder, where its imu.txt would be; empty for a live source.
   virtual std::string recording_directory() const { return {}; }
   // The first frame's colour stamp where it is known before reading (a recording).

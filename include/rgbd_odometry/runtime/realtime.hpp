@@ -27,7 +27,8 @@ namespace rgbdo {
 
 struct RealtimeStats {
   std::uint64_t frames = 0;    // processed
-  std::uint64_t skipped = 0;   // replaced by a newer frame before the reader or processing could take them
+  std::uint64_t skipped = 0;   // replaced by a newer frame before processing could take them
+  std::uint64_t without_depth = 0;  // colour frames the sensor gave up: no depth frame within 20 ms
   std::uint64_t pairs = 0;
   int sensor_losses = 0, reopens = 0;
   int dropped_by_sensor = 0;   // from the sensor's frame indices

@@ -25,11 +25,11 @@ class OpenNiFeed : public FrameFeed {
   void interrupt() override;
   std::string description() const override;
   int dropped_frames() const override;
-  int replaced_frames() const override;
+  int frames_without_depth() const override;
 
  private:
   OpenNiOptions options_;
-  int max_frames_, delivered_ = 0, opens_ = 1, dropped_before_ = 0, replaced_before_ = 0;
+  int max_frames_, delivered_ = 0, opens_ = 1, dropped_before_ = 0, without_depth_before_ = 0;
   bool playback_;
   mutable std::mutex mutex_;  // guards source_ against interrupt() from another thread
   std::unique_ptr<OpenNiSource> source_;

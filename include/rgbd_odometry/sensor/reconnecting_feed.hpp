@@ -26,7 +26,7 @@ class ReconnectingFeed : public FrameFeed {
   void interrupt() override { inner_->interrupt(); }
   std::string description() const override { return inner_->description(); }
   int dropped_frames() const override { return inner_->dropped_frames(); }
-  int replaced_frames() const override { return inner_->replaced_frames(); }
+  int frames_without_depth() const override { return inner_->frames_without_depth(); }
 
  private:
   std::unique_ptr<OpenNiFeed> inner_;

@@ -51,7 +51,7 @@ class OpenNiSource {
   void interrupt();
 
   int dropped_colour_frames() const;   // indices the sensor skipped (thread-safe)
-  int replaced_colour_frames() const;  // given up: two newer ones came before its depth (thread-safe)
+  int colour_frames_without_depth() const;  // given up: no depth within 20 ms before newer ones came (thread-safe)
   std::string description() const;  // device name, URI and the modes in use
 
  private:
