@@ -10,6 +10,8 @@ namespace rgbdo {
 
 FrameExtractor::FrameExtractor(const PipelineConfig& config, TaskRunner* runner)
     : depth_(config.depth),
+      width_(config.camera.width),
+      height_(config.camera.height),
       border_px_(config.features.border_px),
       min_features_(config.ransac.min_inliers),
       detector_(config.features, runner),
@@ -27,13 +29,16 @@ void FrameExtractor::extract(const RgbdFrame& frame, ProcessedFrame& out) {
   out.geometry.clear();
   out.cloud.cols = out.cloud.rows = 0;  // keeps its buffers
   if (frame.status != Status::Ok) return;
-  if (frame.gray.empty() || frame.depth_m.empty() || frame.gray.size() != frame.depth_m.size() ||
-      frame.gray.type() != CV_8UC1 || frame.depth_m.type() != CV_32FC1) {
+  // Of the camera's size only: the intrinsics are for it, and the depth cloud samples the depth
+  // image at pixels laid out for it (a smaller image was read past its end: fuzz_images).
+  if (frame.gray.type() != CV_8UC1 || frame.depth_m.type() != CV_32FC1 || frame.gray.cols != width_ ||
+      frame.gray.rows != height_ || frame.depth_m.size() != frame.gray.size()) {
     out.status = Status::BadFrame;
     out.problem = "a frame the pipeline cannot take: intensity " + cv::typeToString(frame.gray.type()) + " " +
                   std::to_string(frame.gray.cols) + "x" + std::to_string(frame.gray.rows) + ", depth " +
                   cv::typeToString(frame.depth_m.type()) + " " + std::to_string(frame.depth_m.cols) + "x" +
-                  std::to_string(frame.depth_m.rows) + " (needs 8UC1 and 32FC1 of one size)";
+                  std::to_string(frame.depth_m.rows) + " (needs 8UC1 and 32FC1 of the camera's " +
+                  std::to_string(width_) + "x" + std::to_string(height_) + ")";
     return;
   }
   const CostStagesEnd stages_end;

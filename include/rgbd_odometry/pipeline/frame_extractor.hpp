@@ -37,6 +37,7 @@ class FrameExtractor {
 
  private:
   DepthConfig depth_;
+  int width_, height_;  // the camera's: the intrinsics and the depth clouds' sampling are for it
   int border_px_;
   int min_features_;  // fewer than a pose needs: the frame is flagged TooFewFeatures
   FeatureDetector detector_;
