@@ -86,7 +86,7 @@ class GridOrbExtractor {
     std::vector<Candidate> candidates, chosen;
     std::vector<std::uint16_t> score;  // per pixel; 0 = no corner (clean between frames)
     std::vector<std::uint8_t> flags;   // one row of FAST flags
-    std::vector<int> cell_has;         // per cell: kHasCorner at the full threshold, kSearchLow, or 0
+    std::vector<int> cell_state;       // per cell: kHasCorner at the full threshold, kSearchLow, or 0
     int first_keypoint = 0;            // where its keypoints start in the frame's list
   };
 
