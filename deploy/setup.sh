@@ -34,7 +34,7 @@ cd "$repo"
 jobs=${JOBS:-$(nproc)}
 
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libopencv-dev libeigen3-dev libcli11-dev libopenni2-dev libusb-1.0-0-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3-matplotlib
@@ -85,7 +85,10 @@ build() {
   local dir=$1
   shift
   log "building $dir${targets:+ ($targets)}"
-  cmake -S . -B "$dir" -DRGBDO_WERROR=ON "$@" >/dev/null
+  # Ninja for a new build directory; one made before keeps the generator it was made with.
+  local generator=(-G Ninja)
+  [ -f "$dir/CMakeCache.txt" ] && generator=()
+  cmake -S . -B "$dir" "${generator[@]}" -DRGBDO_WERROR=ON "$@" >/dev/null
   # shellcheck disable=SC2086  # targets: a list of names
   cmake --build "$dir" -j "$jobs" ${targets:+--target $targets}
 }
@@ -116,42 +119,56 @@ ctest_in() {
   (cd "$dir" && ctest --output-on-failure -j "$jobs" --output-junit "$repo/build/junit/$name.xml" "$@")
 }
 
-# The studies: tests that replay the recordings under several settings, or draw thousands of
-# samples, to check a measured figure (accuracy, consistency, what a setting buys). Their
-# verdicts rest on the pipeline's arithmetic, which cross_arch_replay_matches_* proves the same
-# on armhf as here, and on code paths the remaining replays also run; they run natively only,
-# not again under qemu (where they were 669 of the armhf suite's 1451 test-seconds) or the
-# sanitizers.
-studies='^(DepthAlignment\.ItsCovarianceCoversTheErrorUnderDepthNoise|DepthAlignment\.ItsResidualsReadTheSensorsDepthNoiseLaw'
-studies+='|PerturbationCovariance\.ResamplingByCellCapturesErrorsSharedWithinACell|TimeOffset\.ItsStandardErrorIsTheSpreadOfTheOffsetsFound'
-studies+='|EndToEnd\.(ACameraAtRestTeachesTheLearntConstantsNothing|TheDepthLagIsReadTheSameWhetherOrNotTheAlignmentIsFused'
-studies+='|MotionWindowMatchesAsWellAsTheFullSearch|WithoutTheLatencyTermsOneSecondWindowsAreOverConfident'
-studies+='|SubpixelTrackingLowersTheOneSecondDrift|ThePapersNoiseModelAloneIsOverConfident|TimingCompensationImprovesTranslation'
-studies+='|ADepthLaggingTheColourIsNotFusedWhereTheFeaturesAreWeak)|cli_replay_with_a_gyro)$'
+# in_background NAME COMMAND...: starts a stage that waits on the network and the disk more
+# than on the CPU, its output kept in build/logs/NAME.log; wait_background waits for every
+# one started, and stops the job with the log of the first that failed.
+background_names=() background_pids=()
+in_background() {
+  local name=$1
+  shift
+  mkdir -p "$repo/build/logs"
+  "$@" >"$repo/build/logs/$name.log" 2>&1 &
+  background_names+=("$name") background_pids+=($!)
+}
+wait_background() {
+  local i
+  for i in "${!background_pids[@]}"; do
+    if ! wait "${background_pids[$i]}"; then
+      cat "$repo/build/logs/${background_names[$i]}.log" >&2
+      echo "setup.sh: ${background_names[$i]} failed" >&2
+      exit 1
+    fi
+    cat "$repo/build/logs/${background_names[$i]}.log"
+  done
+  background_names=() background_pids=()
+}
 
 run_tests() {
   stage "node-mavlink" install_mavlink_checker
-  stage "armhf sysroot" deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
-  # No benchmarks in the armhf build: no test runs them there (the ARM cost model measures
-  # the armhf rgbd-odometry itself).
-  stage "armhf build" build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
-    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf" -DRGBDO_BUILD_BENCHMARKS=OFF
+  # The armhf sysroot (downloads and unpacking) comes in while the native build compiles.
+  in_background armhf-sysroot deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
   # The native build also compares its replay with the armhf binary's (cross_arch_replay_matches).
   stage "native build" build build/release -DCMAKE_BUILD_TYPE=Release -DRGBDO_ARMHF_BUILD_DIR="$repo/build/armhf" \
     -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
+  stage "armhf sysroot (the rest of)" wait_background
+  # No benchmarks in the armhf build: no test runs them there (the ARM cost model measures
+  # the armhf rgbd-odometry itself). The studies run natively only, and each test program
+  # whole, as one process: under qemu a process's start is dear (test/CMakeLists.txt).
+  stage "armhf build" build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf" -DRGBDO_BUILD_BENCHMARKS=OFF -DRGBDO_STUDIES=OFF -DRGBDO_TEST_WHOLE_PROGRAMS=ON
   log "test suite, native release build (x86-64)"
   stage "native suite" ctest_in build/release native
   log "test suite, armhf build under qemu-arm-static"
-  stage "armhf suite (qemu)" ctest_in build/armhf armhf -E "$studies"
+  stage "armhf suite (qemu)" ctest_in build/armhf armhf
   # Sanitised build: memory errors and undefined behaviour must never land. One clang build
   # carries the suite and the libFuzzer targets (test/fuzz: every parser of outside input; its
   # suite replays their kept crash inputs, then fuzzes each from its seeds for a fixed number
-  # of runs with a fixed seed). Leak stacks are unwound in full (the vendor OpenNI2 libraries
-  # have no frame pointers; see test/lsan.supp).
+  # of runs with a fixed seed). The tests that load the vendor OpenNI2 libraries, which have no
+  # frame pointers, unwind their leak stacks in full (test/CMakeLists.txt, test/lsan.supp).
   stage "ASan+UBSan+fuzz build" build_sanitized
   log "test suite and bounded fuzzing, AddressSanitizer + UndefinedBehaviorSanitizer"
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:fast_unwind_on_malloc=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" stage "ASan+UBSan suite" ctest_in build/sanitize sanitize -E "$studies"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" stage "ASan+UBSan suite" ctest_in build/sanitize sanitize
   # ThreadSanitizer: data races and lock-order inversions in the threaded pipeline, the
   # hand-overs, the worker pool, the links and the device clock must never land. Reports
   # inside the vendor libraries we do not build are suppressed by library name
@@ -174,10 +191,8 @@ run_tests() {
 # build_sanitized [TARGET...]: the clang ASan + UBSan build with the fuzz targets (Debian's
 # clang and its compiler-rt carry libFuzzer); with targets, only those.
 build_sanitized() {
-  log "building build/sanitize (clang, ASan + UBSan, libFuzzer targets)"
-  CC=clang CXX=clang++ cmake -S . -B build/sanitize -DRGBDO_WERROR=ON -DRGBDO_FUZZ=ON \
-    -DRGBDO_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-  cmake --build build/sanitize -j "$jobs" ${1:+--target "$@"}
+  CC=clang CXX=clang++ targets="$*" build build/sanitize -DRGBDO_FUZZ=ON -DRGBDO_BUILD_BENCHMARKS=OFF \
+    -DRGBDO_STUDIES=OFF -DRGBDO_TEST_WHOLE_PROGRAMS=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
 }
 
 # The test command's bounded runs again, with seeds FIRST..LAST: the fixed seed fixes the run
