@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <random>
 
+#include "benchmark_loops.hpp"
 #include "paper_reproduction.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/pipeline/noise_model.hpp"
@@ -17,27 +18,16 @@ namespace {
 constexpr int kPairs = 300;
 constexpr int kPerturbations = 100;
 
-struct Inliers {
-  std::vector<Eigen::Vector3d> prev, curr;
-  Inliers() {
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<double> u(-1, 1), z(1, 3);
-    for (int i = 0; i < kPairs; ++i) {
-      curr.emplace_back(u(rng), 0.75 * u(rng), z(rng));
-      prev.push_back(curr.back() + Eigen::Vector3d(0.01, -0.005, 0.02));
-    }
-  }
-};
-
-const Inliers& inliers() {
-  static const Inliers s;
-  return s;
-}
-
 Eigen::Isometry3d inliers_motion() {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(0.01, -0.005, 0.02);
   return T;
+}
+
+// Noise-free inliers of a pure translation.
+const SyntheticPairs& inliers() {
+  static const SyntheticPairs s = synthetic_pairs(kPairs, inliers_motion(), 0, 0, 5);
+  return s;
 }
 
 CovarianceConfig benchmark_config() {
@@ -48,8 +38,7 @@ CovarianceConfig benchmark_config() {
 
 void count_perturbations(benchmark::State& state, const PerturbationCovariance& cov) {
   state.SetLabel(std::string("kernel ") + cov.kernel_name());
-  state.counters["perturbations/s"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * kPerturbations, benchmark::Counter::kIsRate);
+  state.counters["perturbations/s"] = per_second(static_cast<double>(state.iterations()) * kPerturbations);
 }
 
 void BM_Covariance_Batched(benchmark::State& state) {
@@ -99,8 +88,7 @@ void BM_Covariance_EigenUmeyamaLoop(benchmark::State& state) {
     const Matrix6d c = straightforward_covariance(s.prev, s.curr, 1.425e-3, kPerturbations, rng);
     benchmark::DoNotOptimize(c.data());
   }
-  state.counters["perturbations/s"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * kPerturbations, benchmark::Counter::kIsRate);
+  state.counters["perturbations/s"] = per_second(static_cast<double>(state.iterations()) * kPerturbations);
 }
 BENCHMARK(BM_Covariance_EigenUmeyamaLoop)->Unit(benchmark::kMicrosecond);
 

@@ -7,6 +7,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "benchmark_loops.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
 #include "rgbd_odometry/pipeline/match.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
@@ -40,8 +41,7 @@ const Descriptors& descriptors() {
 }
 
 void set_rate(benchmark::State& state) {
-  state.counters["descriptor_pairs/s"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * kDescriptors * kDescriptors, benchmark::Counter::kIsRate);
+  state.counters["descriptor_pairs/s"] = per_second(static_cast<double>(state.iterations()) * kDescriptors * kDescriptors);
 }
 
 void BM_NearestTwo(benchmark::State& state, const simd::KernelSet* set) {

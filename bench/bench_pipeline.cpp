@@ -8,6 +8,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "benchmark_loops.hpp"
 #include "paper_reproduction.hpp"
 #include "rgbd_odometry/pipeline/mask.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
@@ -83,13 +84,12 @@ void BM_Detect(benchmark::State& state) {
     extractor.extract(f.frames[i++ % f.frames.size()], out);
     benchmark::DoNotOptimize(out.features.keypoints.data());
   }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["frames/s"] = per_second(static_cast<double>(state.iterations()));
 }
 BENCHMARK(BM_Detect)->Unit(benchmark::kMillisecond);
 
 void set_pair_rate(benchmark::State& state, const cv::Mat& a, const cv::Mat& b) {
-  state.counters["descriptor_pairs/s"] = benchmark::Counter(static_cast<double>(state.iterations()) * a.rows * b.rows,
-                                                            benchmark::Counter::kIsRate);
+  state.counters["descriptor_pairs/s"] = per_second(static_cast<double>(state.iterations()) * a.rows * b.rows);
 }
 
 void BM_Match_Symmetric(benchmark::State& state) {
@@ -124,16 +124,7 @@ BENCHMARK(BM_BackProject)->Unit(benchmark::kMicrosecond);
 void BM_Ransac(benchmark::State& state) {
   const auto& f = fixture();
   RigidRansac ransac(f.config.ransac, SensorNoise{}, f.config.features.max_features);
-  std::uint64_t seed = 0;
-  int hypotheses = 0;
-  RansacResult r;
-  for (auto _ : state) {
-    Rng rng(seed++);
-    ransac.estimate(f.pairs.prev, f.pairs.curr, rng, r);
-    hypotheses += r.hypotheses;
-  }
-  state.counters["pairs"] = static_cast<double>(f.pairs.size());
-  state.counters["hypotheses/s"] = benchmark::Counter(hypotheses, benchmark::Counter::kIsRate);
+  measure_ransac(state, ransac, f.pairs.prev, f.pairs.curr);
 }
 BENCHMARK(BM_Ransac)->Unit(benchmark::kMicrosecond);
 
@@ -154,14 +145,10 @@ BENCHMARK(BM_Covariance)->Unit(benchmark::kMillisecond);
 void BM_Pipeline(benchmark::State& state) {
   const auto& f = fixture();
   OdometryPipeline pipeline(f.config);
-  size_t i = 0;
-  int failed = 0;
-  for (auto _ : state) {
-    const auto r = pipeline.process(looped_frame(f.frames, i++));
-    failed += r && r->status != Status::Ok;
-  }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-  state.counters["failed"] = failed;
+  measure_frames(state, [&](std::size_t i) {
+    const auto r = pipeline.process(looped_frame(f.frames, i));
+    return r && r->status != Status::Ok;
+  });
 }
 BENCHMARK(BM_Pipeline)->Unit(benchmark::kMillisecond);
 
@@ -170,16 +157,12 @@ BENCHMARK(BM_Pipeline)->Unit(benchmark::kMillisecond);
 void BM_PaperReproduction(benchmark::State& state) {
   const auto& f = fixture();
   PaperReproduction reproduction(f.config);
-  size_t i = 0;
-  int failed = 0;
   Eigen::Isometry3d motion;
   Matrix6d covariance;
-  for (auto _ : state) {
+  measure_frames(state, [&](std::size_t i) {
     const bool ok = reproduction.process(looped_frame(f.frames, i), motion, covariance);
-    failed += i++ > 0 && !ok;
-  }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
-  state.counters["failed"] = failed;
+    return i > 0 && !ok;  // the first frame has no pair
+  });
 }
 BENCHMARK(BM_PaperReproduction)->Unit(benchmark::kMillisecond);
 

@@ -73,3 +73,15 @@ inline NearestTwo merge_lanes(const std::uint32_t* best, const std::uint32_t* se
 
 }  // namespace
 }  // namespace rgbdo::simd::reference
+
+// A kernel set's two Hamming kernels as the reference loops above, compiled with the including
+// file's instruction-set flags (hamming_scalar.cpp: the baseline; hamming_popcnt.cpp: POPCNT).
+#define RGBDO_HAMMING_KERNELS_FROM_REFERENCE(suffix)                                                               \
+  void nearest_two_hamming_##suffix(const std::uint8_t* query, int n_query, std::size_t query_stride,              \
+                                    const std::uint8_t* train, int n_train, std::size_t train_stride, int bytes,    \
+                                    NearestTwo* query_out, NearestTwo* train_out) {                                 \
+    reference::nearest_two(query, n_query, query_stride, train, n_train, train_stride, bytes, query_out, train_out); \
+  }                                                                                                                  \
+  RGBDO_HAMMING_ROWS(hamming_rows_##suffix) {                                                                        \
+    reference::hamming_rows(query, train, train_stride, rows, n_rows, bytes, distances);                             \
+  }

@@ -100,6 +100,37 @@ void box_muller_of(typename Ops::U a, typename Ops::U b, typename Ops::F& z0, ty
   z1 = Ops::mul(r, s);
 }
 
+// One point's contribution to a block of perturbations, one vector of lanes (its random state
+// `state`, its weights `w`): six normal draws (the keypoint's two lateral errors and its depth
+// along the viewing ray, in each frame), the perturbed points s (current frame) and d
+// (previous), and their weighted sums S, D and outer products M.
+template <class Ops>
+void accumulate_point_of(const PerturbationInput& in, int k, typename Ops::F w, typename Ops::U state[4],
+                         typename Ops::F S[3], typename Ops::F D[3], typename Ops::F M[9]) {
+  using F = typename Ops::F;
+  F n[6];
+  for (int pair = 0; pair < 3; ++pair) {
+    const typename Ops::U a = next_of<Ops>(state);
+    const typename Ops::U c = next_of<Ops>(state);
+    box_muller_of<Ops>(a, c, n[2 * pair], n[2 * pair + 1]);
+  }
+  const auto add_mul = [](F base, float sigma, F x) { return Ops::add(base, Ops::mul(Ops::set(sigma), x)); };
+  const F s[3] = {add_mul(add_mul(Ops::set(in.sx[k]), in.sigma_sx[k], n[0]), in.ray_sx[k], n[2]),
+                  add_mul(add_mul(Ops::set(in.sy[k]), in.sigma_sy[k], n[1]), in.ray_sy[k], n[2]),
+                  add_mul(Ops::set(in.sz[k]), in.ray_sz[k], n[2])};
+  const F d[3] = {add_mul(add_mul(Ops::set(in.dx[k]), in.sigma_dx[k], n[3]), in.ray_dx[k], n[5]),
+                  add_mul(add_mul(Ops::set(in.dy[k]), in.sigma_dy[k], n[4]), in.ray_dy[k], n[5]),
+                  add_mul(Ops::set(in.dz[k]), in.ray_dz[k], n[5])};
+  F ws[3];
+  for (int j = 0; j < 3; ++j) {
+    ws[j] = Ops::mul(w, s[j]);
+    S[j] = Ops::add(S[j], ws[j]);
+    D[j] = Ops::add(D[j], Ops::mul(w, d[j]));
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) M[3 * i + j] = Ops::add(M[3 * i + j], Ops::mul(d[i], ws[j]));
+}
+
 // Top 23 bits to (0, 1), every value exactly representable: never 0 (log) and never 1.
 // (With 24 bits, (2^24 - 1) + 0.5 needs 25 significant bits and rounds to exactly 1.)
 inline float to_unit(std::uint32_t x) { return (static_cast<float>(x >> 9) + 0.5f) * 0x1.0p-23f; }

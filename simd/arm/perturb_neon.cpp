@@ -58,20 +58,6 @@ struct NeonOps {
   }
 };
 
-inline uint32x4_t next(Half& st) { return reference::next_of<NeonOps>(st.s); }
-
-inline void box_muller(uint32x4_t a, uint32x4_t b, float32x4_t& z0, float32x4_t& z1) {
-  reference::box_muller_of<NeonOps>(a, b, z0, z1);
-}
-
-inline float32x4_t add_mul(float base, float sigma, float32x4_t n) {
-  return vaddq_f32(vdupq_n_f32(base), vmulq_f32(vdupq_n_f32(sigma), n));
-}
-
-inline float32x4_t add_mul(float32x4_t base, float sigma, float32x4_t n) {
-  return vaddq_f32(base, vmulq_f32(vdupq_n_f32(sigma), n));
-}
-
 }  // namespace
 
 void perturbation_sums_neon(const PerturbationInput& in, const PerturbationSums& out) {
@@ -97,26 +83,7 @@ void perturbation_sums_neon(const PerturbationInput& in, const PerturbationSums&
       const float* g = in.cell_weight + static_cast<long>(in.cell[k]) * in.perturbations + b * L;
       for (int h = 0; h < 2; ++h) {
         const float32x4_t w = vmulq_f32(vdupq_n_f32(in.w[k]), vld1q_f32(g + 4 * h));
-        float32x4_t n[6];
-        for (int pair = 0; pair < 3; ++pair) {
-          const uint32x4_t a = next(st[h]);
-          const uint32x4_t c = next(st[h]);
-          box_muller(a, c, n[2 * pair], n[2 * pair + 1]);
-        }
-        const float32x4_t s[3] = {add_mul(add_mul(in.sx[k], in.sigma_sx[k], n[0]), in.ray_sx[k], n[2]),
-                                  add_mul(add_mul(in.sy[k], in.sigma_sy[k], n[1]), in.ray_sy[k], n[2]),
-                                  add_mul(in.sz[k], in.ray_sz[k], n[2])};
-        const float32x4_t d[3] = {add_mul(add_mul(in.dx[k], in.sigma_dx[k], n[3]), in.ray_dx[k], n[5]),
-                                  add_mul(add_mul(in.dy[k], in.sigma_dy[k], n[4]), in.ray_dy[k], n[5]),
-                                  add_mul(in.dz[k], in.ray_dz[k], n[5])};
-        float32x4_t ws[3];
-        for (int j = 0; j < 3; ++j) {
-          ws[j] = vmulq_f32(w, s[j]);
-          S[h][j] = vaddq_f32(S[h][j], ws[j]);
-          D[h][j] = vaddq_f32(D[h][j], vmulq_f32(w, d[j]));
-        }
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) M[h][3 * i + j] = vaddq_f32(M[h][3 * i + j], vmulq_f32(d[i], ws[j]));
+        reference::accumulate_point_of<NeonOps>(in, k, w, st[h].s, S[h], D[h], M[h]);
       }
     }
     for (int h = 0; h < 2; ++h) {

@@ -27,34 +27,18 @@ void perturbation_sums_scalar(const PerturbationInput& in, const PerturbationSum
   std::uint32_t state[L][4];
   seed_all(in.seed, state);
   for (int b = 0; b < in.perturbations / L; ++b) {
-    float S[3][L] = {}, D[3][L] = {}, M[9][L] = {};
-    for (int k = 0; k < in.points; ++k) {
-      float n[6][L];
-      draw_six(state, n);
+    float S[L][3] = {}, D[L][3] = {}, M[L][9] = {};
+    for (int k = 0; k < in.points; ++k)
       for (int l = 0; l < L; ++l) {
-        const float s[3] = {(in.sx[k] + in.sigma_sx[k] * n[0][l]) + in.ray_sx[k] * n[2][l],
-                            (in.sy[k] + in.sigma_sy[k] * n[1][l]) + in.ray_sy[k] * n[2][l],
-                            in.sz[k] + in.ray_sz[k] * n[2][l]};
-        const float d[3] = {(in.dx[k] + in.sigma_dx[k] * n[3][l]) + in.ray_dx[k] * n[5][l],
-                            (in.dy[k] + in.sigma_dy[k] * n[4][l]) + in.ray_dy[k] * n[5][l],
-                            in.dz[k] + in.ray_dz[k] * n[5][l]};
         const float w = in.w[k] * in.cell_weight[static_cast<long>(in.cell[k]) * in.perturbations + b * L + l];
-        float ws[3];
-        for (int j = 0; j < 3; ++j) {
-          ws[j] = w * s[j];
-          S[j][l] = S[j][l] + ws[j];
-          D[j][l] = D[j][l] + w * d[j];
-        }
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) M[3 * i + j][l] = M[3 * i + j][l] + d[i] * ws[j];
+        reference::accumulate_point_of<reference::ScalarOps>(in, k, w, state[l], S[l], D[l], M[l]);
       }
-    }
     for (int l = 0; l < L; ++l) {
       for (int j = 0; j < 3; ++j) {
-        out.s[j][b * L + l] = S[j][l];
-        out.d[j][b * L + l] = D[j][l];
+        out.s[j][b * L + l] = S[l][j];
+        out.d[j][b * L + l] = D[l][j];
       }
-      for (int e = 0; e < 9; ++e) out.m[e][b * L + l] = M[e][l];
+      for (int e = 0; e < 9; ++e) out.m[e][b * L + l] = M[l][e];
     }
   }
 }

@@ -46,20 +46,6 @@ struct Avx2Ops {
   }
 };
 
-inline __m256i next(Lanes& st) { return reference::next_of<Avx2Ops>(st.s); }  // xoshiro128+ in 8 lanes
-
-inline void box_muller(__m256i a, __m256i b, __m256& z0, __m256& z1) {
-  reference::box_muller_of<Avx2Ops>(a, b, z0, z1);
-}
-
-inline __m256 add_mul(float base, float sigma, __m256 n) {
-  return _mm256_add_ps(_mm256_set1_ps(base), _mm256_mul_ps(_mm256_set1_ps(sigma), n));
-}
-
-inline __m256 add_mul(__m256 base, float sigma, __m256 n) {
-  return _mm256_add_ps(base, _mm256_mul_ps(_mm256_set1_ps(sigma), n));
-}
-
 }  // namespace
 
 void perturbation_sums_avx2(const PerturbationInput& in, const PerturbationSums& out) {
@@ -80,29 +66,10 @@ void perturbation_sums_avx2(const PerturbationInput& in, const PerturbationSums&
     for (auto& v : D) v = _mm256_setzero_ps();
     for (auto& v : M) v = _mm256_setzero_ps();
     for (int k = 0; k < in.points; ++k) {
-      __m256 n[6];
-      for (int pair = 0; pair < 3; ++pair) {
-        const __m256i a = next(st);
-        const __m256i c = next(st);
-        box_muller(a, c, n[2 * pair], n[2 * pair + 1]);
-      }
-      const __m256 s[3] = {add_mul(add_mul(in.sx[k], in.sigma_sx[k], n[0]), in.ray_sx[k], n[2]),
-                           add_mul(add_mul(in.sy[k], in.sigma_sy[k], n[1]), in.ray_sy[k], n[2]),
-                           add_mul(in.sz[k], in.ray_sz[k], n[2])};
-      const __m256 d[3] = {add_mul(add_mul(in.dx[k], in.sigma_dx[k], n[3]), in.ray_dx[k], n[5]),
-                           add_mul(add_mul(in.dy[k], in.sigma_dy[k], n[4]), in.ray_dy[k], n[5]),
-                           add_mul(in.dz[k], in.ray_dz[k], n[5])};
       const __m256 w = _mm256_mul_ps(
           _mm256_set1_ps(in.w[k]),
           _mm256_loadu_ps(in.cell_weight + static_cast<long>(in.cell[k]) * in.perturbations + b * L));
-      __m256 ws[3];
-      for (int j = 0; j < 3; ++j) {
-        ws[j] = _mm256_mul_ps(w, s[j]);
-        S[j] = _mm256_add_ps(S[j], ws[j]);
-        D[j] = _mm256_add_ps(D[j], _mm256_mul_ps(w, d[j]));
-      }
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) M[3 * i + j] = _mm256_add_ps(M[3 * i + j], _mm256_mul_ps(d[i], ws[j]));
+      reference::accumulate_point_of<Avx2Ops>(in, k, w, st.s, S, D, M);
     }
     for (int j = 0; j < 3; ++j) {
       _mm256_storeu_ps(out.s[j] + b * L, S[j]);

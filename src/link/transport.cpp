@@ -52,17 +52,22 @@ void for_each_option(const std::string& uri, std::string_view query, OnPair on_p
     fail(uri, "option '" + std::string(*bad) + "' needs a value (KEY=VALUE)");
 }
 
+// SCHEME://[ADDRESS]:PORT: `host` gets the address without its brackets; returns the port's text.
+std::string_view split_bracketed(const std::string& uri, std::string_view rest, const char* scheme, std::string& host) {
+  const auto close = rest.find(']');
+  if (close == std::string_view::npos) fail(uri, "IPv6 address without its closing ']'");
+  host = std::string(rest.substr(1, close - 1));
+  const std::string_view after = rest.substr(close + 1);
+  if (after.empty() || after.front() != ':') fail(uri, "missing port (expected " + std::string(scheme) + "://[ADDRESS]:PORT)");
+  return after.substr(1);
+}
+
 UdpLinkOptions parse_udp(const std::string& uri, std::string_view rest, std::string_view query) {
   UdpLinkOptions o;
   std::string_view port_text;
   if (rest.empty()) fail(uri, "missing host and port (expected udp://HOST:PORT)");
   if (rest.front() == '[') {  // udp://[::1]:14550
-    const auto close = rest.find(']');
-    if (close == std::string_view::npos) fail(uri, "IPv6 address without its closing ']'");
-    o.host = std::string(rest.substr(1, close - 1));
-    const std::string_view after = rest.substr(close + 1);
-    if (after.empty() || after.front() != ':') fail(uri, "missing port (expected udp://[ADDRESS]:PORT)");
-    port_text = after.substr(1);
+    port_text = split_bracketed(uri, rest, "udp", o.host);
   } else {
     const auto colon = rest.find(':');
     if (colon == std::string_view::npos) fail(uri, "missing port (expected udp://HOST:PORT)");
@@ -90,13 +95,8 @@ UdpLinkOptions parse_udpin(const std::string& uri, std::string_view rest, std::s
   std::string_view port_text;
   if (rest.empty()) fail(uri, "missing port (expected udpin://[ADDRESS]:PORT, e.g. udpin://:14540)");
   if (rest.front() == '[') {  // udpin://[::]:14540
-    const auto close = rest.find(']');
-    if (close == std::string_view::npos) fail(uri, "IPv6 address without its closing ']'");
-    o.host = std::string(rest.substr(1, close - 1));
+    port_text = split_bracketed(uri, rest, "udpin", o.host);
     if (o.host.empty()) fail(uri, "empty IPv6 address (udpin://[::]:PORT listens on all)");
-    const std::string_view after = rest.substr(close + 1);
-    if (after.empty() || after.front() != ':') fail(uri, "missing port (expected udpin://[ADDRESS]:PORT)");
-    port_text = after.substr(1);
   } else {
     const auto colon = rest.rfind(':');
     if (colon == std::string_view::npos) fail(uri, "missing port (expected udpin://[ADDRESS]:PORT, e.g. udpin://:14540)");

@@ -39,6 +39,12 @@ struct PeerAddress {
   socklen_t length = 0;
 };
 
+// A link's name in its messages: "udp host:port", an IPv6 host in brackets.
+std::string link_name(const char* scheme, const UdpLinkOptions& o) {
+  const bool ipv6 = o.host.find(':') != std::string::npos;
+  return std::string(scheme) + " " + (ipv6 ? "[" + o.host + "]" : o.host) + ":" + std::to_string(o.port);
+}
+
 std::string numeric_address(const sockaddr_storage& a, socklen_t length) {
   char host[NI_MAXHOST] = {};
   if (getnameinfo(reinterpret_cast<const sockaddr*>(&a), length, host, sizeof host, nullptr, 0, NI_NUMERICHOST) != 0)
@@ -106,6 +112,15 @@ struct UdpCounters {
     return s;
   }
 
+  // Whether a frame is one no link sends (empty, or longer than MAVLink's longest): counted and
+  // reported if so.
+  bool reject_malformed(std::span<const std::uint8_t> frame, LinkProblem& problem) {
+    if (!frame.empty() && frame.size() <= kMaxLinkFrameBytes) return false;
+    rejected.fetch_add(1, std::memory_order_relaxed);
+    problem.report("frame rejected: empty or longer than 280 bytes", 0, false);
+    return true;
+  }
+
   // What one datagram's send() or sendto() (returning n) came to, counted and reported.
   SendResult count_send(ssize_t n, std::size_t size, LinkProblem& problem) {
     if (n == static_cast<ssize_t>(size)) {
@@ -132,9 +147,7 @@ struct UdpCounters {
 class UdpLink final : public OutputLink {
  public:
   explicit UdpLink(const UdpLinkOptions& o)
-      : name_("udp " + (o.host.find(':') != std::string::npos ? "[" + o.host + "]" : o.host) + ":" +
-              std::to_string(o.port)),
-        problem_(name_) {
+      : name_(link_name("udp", o)), problem_(name_) {
     const PeerAddress peer = resolve(o, name_);
     peer_ = peer.address;
     peer_length_ = peer.length;
@@ -156,11 +169,7 @@ class UdpLink final : public OutputLink {
   ~UdpLink() override { ::close(fd_); }
 
   SendResult send(std::span<const std::uint8_t> frame) noexcept override {
-    if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
-      counters_.rejected.fetch_add(1, std::memory_order_relaxed);
-      problem_.report("frame rejected: empty or longer than 280 bytes", 0, false);
-      return SendResult::Rejected;
-    }
+    if (counters_.reject_malformed(frame, problem_)) return SendResult::Rejected;
     if (!connected_ && !retry_connect()) {
       counters_.dropped_link_down.fetch_add(1, std::memory_order_relaxed);
       return SendResult::DroppedLinkDown;
@@ -276,9 +285,7 @@ PeerAddress resolve_local(const UdpLinkOptions& o, const std::string& name) {
 class UdpListenLink final : public OutputLink {
  public:
   explicit UdpListenLink(const UdpLinkOptions& o)
-      : name_("udpin " + (o.host.find(':') != std::string::npos ? "[" + o.host + "]" : o.host) + ":" +
-              std::to_string(o.port)),
-        problem_(name_) {
+      : name_(link_name("udpin", o)), problem_(name_) {
     const PeerAddress local = resolve_local(o, name_);
     fd_ = ::socket(local.address.ss_family, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd_ < 0) throw LinkError(name_ + ": cannot create a socket: " + link_detail::errno_text(errno));
@@ -300,11 +307,7 @@ class UdpListenLink final : public OutputLink {
   ~UdpListenLink() override { ::close(fd_); }
 
   SendResult send(std::span<const std::uint8_t> frame) noexcept override {
-    if (frame.empty() || frame.size() > kMaxLinkFrameBytes) {
-      counters_.rejected.fetch_add(1, std::memory_order_relaxed);
-      problem_.report("frame rejected: empty or longer than 280 bytes", 0, false);
-      return SendResult::Rejected;
-    }
+    if (counters_.reject_malformed(frame, problem_)) return SendResult::Rejected;
     sockaddr_storage peer{};
     socklen_t peer_length = 0;
     {

@@ -19,6 +19,26 @@ constexpr double kMaxRefinementRotation_rad = 0.05;
 // sqrt of chi^2(3)'s 99 % point: a Gaussian point pair is weighed in full 99 times in 100.
 constexpr double kHuberMahalanobis = 3.368;
 
+// Whether the sample idx[0..2] cannot give a motion worth scoring (see draw_sample).
+bool sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                          const int* idx, double inlier_threshold_m) {
+  for (const auto* cloud : {&prev, &curr}) {
+    const Eigen::Vector3d& a = (*cloud)[static_cast<size_t>(idx[0])];
+    const Eigen::Vector3d ab = (*cloud)[static_cast<size_t>(idx[1])] - a;
+    const Eigen::Vector3d ac = (*cloud)[static_cast<size_t>(idx[2])] - a;
+    const double lab = ab.norm(), lac = ac.norm();
+    if (lab < kMinSampleSide_m || lac < kMinSampleSide_m) return true;
+    if (ab.cross(ac).norm() < kMinSampleSine * lab * lac) return true;
+  }
+  // A rigid motion keeps distances: a sample that stretches a side by more than twice the
+  // inlier threshold holds an outlier, and need not be solved.
+  for (int e = 0; e < 3; ++e) {
+    const auto i = static_cast<size_t>(idx[e]), j = static_cast<size_t>(idx[(e + 1) % 3]);
+    if (std::abs((prev[i] - prev[j]).norm() - (curr[i] - curr[j]).norm()) > 2 * inlier_threshold_m) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 int adaptive_hypotheses(int inliers, int pairs, int cap) {
@@ -111,23 +131,17 @@ Eigen::Isometry3d RigidRansac::fit_anisotropic(const std::vector<Eigen::Vector3d
   return T;
 }
 
-bool RigidRansac::sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev,
-                                       const std::vector<Eigen::Vector3d>& curr, const int* idx) const {
-  for (const auto* cloud : {&prev, &curr}) {
-    const Eigen::Vector3d& a = (*cloud)[static_cast<size_t>(idx[0])];
-    const Eigen::Vector3d ab = (*cloud)[static_cast<size_t>(idx[1])] - a;
-    const Eigen::Vector3d ac = (*cloud)[static_cast<size_t>(idx[2])] - a;
-    const double lab = ab.norm(), lac = ac.norm();
-    if (lab < kMinSampleSide_m || lac < kMinSampleSide_m) return true;
-    if (ab.cross(ac).norm() < kMinSampleSine * lab * lac) return true;
-  }
-  // A rigid motion keeps distances: a sample that stretches a side by more than twice the
-  // inlier threshold holds an outlier, and need not be solved.
+bool draw_sample(Rng& rng, const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                 double inlier_threshold_m, Eigen::Vector3d s[3], Eigen::Vector3d d[3]) {
+  const auto n = static_cast<std::uint32_t>(prev.size());
+  const int idx[3] = {static_cast<int>(rng.below(n)), static_cast<int>(rng.below(n)), static_cast<int>(rng.below(n))};
+  if (idx[0] == idx[1] || idx[0] == idx[2] || idx[1] == idx[2]) return false;
+  if (sample_is_degenerate(prev, curr, idx, inlier_threshold_m)) return false;
   for (int e = 0; e < 3; ++e) {
-    const auto i = static_cast<size_t>(idx[e]), j = static_cast<size_t>(idx[(e + 1) % 3]);
-    if (std::abs((prev[i] - prev[j]).norm() - (curr[i] - curr[j]).norm()) > 2 * config_.inlier_threshold_m) return true;
+    s[e] = curr[static_cast<size_t>(idx[e])];
+    d[e] = prev[static_cast<size_t>(idx[e])];
   }
-  return false;
+  return true;
 }
 
 void RigidRansac::estimate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr, Rng& rng,
@@ -165,15 +179,9 @@ int RigidRansac::sample_hypotheses(const std::vector<Eigen::Vector3d>& prev, con
   int needed = config_.max_iterations;
   // Degenerate draws are cheap and do not count as hypotheses, but are bounded too.
   const int max_draws = 10 * config_.max_iterations;
-  const auto un = static_cast<std::uint32_t>(n);
   for (int draw = 0; draw < max_draws && hypotheses < needed; ++draw) {
-    const int idx[3] = {static_cast<int>(rng.below(un)), static_cast<int>(rng.below(un)), static_cast<int>(rng.below(un))};
-    if (idx[0] == idx[1] || idx[0] == idx[2] || idx[1] == idx[2]) continue;
-    if (sample_is_degenerate(prev, curr, idx)) continue;
-    const Eigen::Vector3d s[3] = {curr[static_cast<size_t>(idx[0])], curr[static_cast<size_t>(idx[1])],
-                                  curr[static_cast<size_t>(idx[2])]};
-    const Eigen::Vector3d d[3] = {prev[static_cast<size_t>(idx[0])], prev[static_cast<size_t>(idx[1])],
-                                  prev[static_cast<size_t>(idx[2])]};
+    Eigen::Vector3d s[3], d[3];
+    if (!draw_sample(rng, prev, curr, config_.inlier_threshold_m, s, d)) continue;
     Eigen::Isometry3d T;
     if (!fit_triplet(s, d, T)) continue;
     ++hypotheses;

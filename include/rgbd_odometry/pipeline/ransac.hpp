@@ -47,6 +47,13 @@ struct PointPairCovariances {
 // would exceed it).
 int adaptive_hypotheses(int inliers, int pairs, int cap);
 
+// Draws a 3-point sample of the pairs (three calls of rng.below): false when it cannot give a
+// motion worth scoring (an index repeated, a side shorter than 2 cm or a triangle flatter than
+// ~6 degrees in either cloud, a side whose length the two clouds disagree on by more than twice
+// the inlier threshold: a rigid motion keeps distances); else its points, s of curr, d of prev.
+bool draw_sample(Rng& rng, const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
+                 double inlier_threshold_m, Eigen::Vector3d s[3], Eigen::Vector3d d[3]);
+
 class RigidRansac {
  public:
   RigidRansac(const RansacConfig& ransac, const SensorNoise& noise, int capacity);
@@ -67,8 +74,6 @@ class RigidRansac {
 
  private:
   void load(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr);  // into the SoA
-  bool sample_is_degenerate(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
-                            const int* idx) const;
   void select_inliers(const std::vector<Eigen::Vector3d>& prev, const std::vector<Eigen::Vector3d>& curr,
                       const Eigen::Isometry3d& T, double threshold, std::vector<int>& out) const;
   // Gauss-Newton on sum_k r_k^T (C_prev + R C_curr R^T)^-1 r_k over the inliers, from T.
