@@ -229,64 +229,63 @@ void GridOrbExtractor::build_box_sums(Level& L) const {
 }
 
 void GridOrbExtractor::detect_level(Level& L, const cv::Mat& mask) const {
+  const int w = L.image.cols, h = L.image.rows;
   const auto stride = static_cast<int>(L.image.step);
-  std::array<std::ptrdiff_t, 16> circle{};  // FAST circle (radius 3) at this level's stride
-  for (int k = 0; k < 16; ++k) circle[static_cast<size_t>(k)] = simd::kFastCircle[k][1] * stride + simd::kFastCircle[k][0];
-  L.candidates.clear();
-  const LevelArea area{kBorder, L.image.cols - kBorder, kBorder, L.image.rows - kBorder};
-  if (area.x_end <= area.x_begin || area.y_end <= area.y_begin) return;
-  segment_test(L, mask, circle.data(), config_.fast_threshold, area, true, nullptr);
+  std::array<std::ptrdiff_t, 16> circle_offset{};  // FAST circle (radius 3) at this level's stride
+  for (int k = 0; k < 16; ++k) circle_offset[static_cast<size_t>(k)] = simd::kFastCircle[k][1] * stride + simd::kFastCircle[k][0];
+  const int cells_x = (w - 2 * kBorder + L.cell_px - 1) / L.cell_px;
+  const int cells_y = (h - 2 * kBorder + L.cell_px - 1) / L.cell_px;
+  std::vector<Candidate>& candidates = L.candidates;
+  candidates.clear();
+
+  // The segment test at threshold t over [x_begin, x_end) x [y_begin, y_end) (the active SIMD
+  // kernel flags the corners), then each corner's mask and score; appends the corners. With
+  // `cells` (one row of the cell grid, its first cell at kBorder), only corners in cells marked
+  // kSearchLow there.
+  const auto segment_test = [&](int t, int x_begin, int x_end, int y_begin, int y_end, bool strong,
+                                const int* cells) {
+    std::uint8_t* flags = L.flags.data();
+    for (int y = y_begin; y < y_end; ++y) {
+      const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
+      const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
+      fast9_row_(row + x_begin, stride, x_end - x_begin, t, flags);
+      const int n = x_end - x_begin;
+      for (int i = 0; i < n; ++i) {
+        // Corners are sparse: skip eight flags at a time while they are all zero.
+        if ((i & 7) == 0 && i + 8 <= n) {
+          std::uint64_t eight;
+          std::memcpy(&eight, flags + i, sizeof eight);
+          if (eight == 0) {
+            i += 7;
+            continue;
+          }
+        }
+        if (flags[i] == 0) continue;
+        const int x = x_begin + i;
+        if (cells != nullptr && cells[(x - kBorder) / L.cell_px] != kSearchLow) continue;
+        // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
+        if (mask_row[L.mask_x[static_cast<size_t>(x)]] == 0) continue;
+        // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score),
+        // at least 1 for a corner.
+        const int score = fast9_score_(row + x, circle_offset.data(), t, flags[i]) + 1;
+        // Bounded (sized at construction: no allocation); only noise fills it.
+        if (candidates.size() == candidates.capacity()) return;
+        candidates.push_back({x, y, score, strong});
+      }
+    }
+  };
+  const int x_begin = kBorder, x_end = w - kBorder, y_begin = kBorder, y_end = h - kBorder;
+  if (x_end <= x_begin || y_end <= y_begin) return;
+  segment_test(config_.fast_threshold, x_begin, x_end, y_begin, y_end, true, nullptr);
   // A level with corners to spare (textured, sharp) keeps to the full threshold: measured on
   // fr1_xyz, its weak corners cost ~23 M ARM instructions per frame and made the odometry no
   // better. When blur or a bare scene leaves fewer than kFallbackMargin corners per keypoint
   // wanted, cells without a corner look again at the low threshold (ORB-SLAM's fallback).
-  if (L.candidates.size() < static_cast<size_t>(kFallbackMargin * std::max(L.budget, 1)))
-    search_low_threshold(L, mask, circle.data(), area);
-  suppress_non_maxima(L);
-}
-
-void GridOrbExtractor::segment_test(Level& L, const cv::Mat& mask, const std::ptrdiff_t* circle, int threshold,
-                                    const LevelArea& area, bool strong, const int* cells) const {
-  const auto stride = static_cast<int>(L.image.step);
-  std::uint8_t* flags = L.flags.data();
-  std::vector<Candidate>& candidates = L.candidates;
-  const int n = area.x_end - area.x_begin;
-  for (int y = area.y_begin; y < area.y_end; ++y) {
-    const std::uint8_t* row = L.image.ptr<std::uint8_t>(y);
-    const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
-    fast9_row_(row + area.x_begin, stride, n, threshold, flags);
-    for (int i = 0; i < n; ++i) {
-      // Corners are sparse: skip eight flags at a time while they are all zero.
-      if ((i & 7) == 0 && i + 8 <= n) {
-        std::uint64_t eight;
-        std::memcpy(&eight, flags + i, sizeof eight);
-        if (eight == 0) {
-          i += 7;
-          continue;
-        }
-      }
-      if (flags[i] == 0) continue;
-      const int x = area.x_begin + i;
-      if (cells != nullptr && cells[(x - kBorder) / L.cell_px] != kSearchLow) continue;
-      // Only inside the mask (periphery, no depth), looked up at the level-0 pixel.
-      if (mask_row[L.mask_x[static_cast<size_t>(x)]] == 0) continue;
-      // Score: the summed excess of the arc's side over the threshold (FAST-ER's SAD score),
-      // at least 1 for a corner.
-      const int score = fast9_score_(row + x, circle, threshold, flags[i]) + 1;
-      // Bounded (sized at construction: no allocation); only noise fills it.
-      if (candidates.size() == candidates.capacity()) return;
-      candidates.push_back({x, y, score, strong});
-    }
-  }
-}
-
-void GridOrbExtractor::search_low_threshold(Level& L, const cv::Mat& mask, const std::ptrdiff_t* circle,
-                                            const LevelArea& area) const {
-  const int cells_x = (area.x_end - area.x_begin + L.cell_px - 1) / L.cell_px;
-  const int cells_y = (area.y_end - area.y_begin + L.cell_px - 1) / L.cell_px;
+  const auto nms = [&] { suppress_non_maxima(L); };
+  if (candidates.size() >= static_cast<size_t>(kFallbackMargin * std::max(L.budget, 1))) return nms();
   std::vector<int>& state = L.cell_state;
-  state.assign(static_cast<size_t>(cells_x * cells_y), 0);
-  for (const Candidate& c : L.candidates)
+  state.assign(static_cast<size_t>(std::max(cells_x, 0) * std::max(cells_y, 0)), 0);
+  for (const Candidate& c : candidates)
     state[static_cast<size_t>(((c.y - kBorder) / L.cell_px) * cells_x + (c.x - kBorder) / L.cell_px)] = kHasCorner;
   // One segment test per row of cells, over the span from its first cell to search to its last
   // (not one per cell: a bare scene searches nearly every cell, and the kernel's per-call and
@@ -294,32 +293,37 @@ void GridOrbExtractor::search_low_threshold(Level& L, const cv::Mat& mask, const
   // frame's 18-20 M). At most a second pass over the level, whatever the scene.
   for (int cy = 0; cy < cells_y; ++cy) {
     int* row_cells = state.data() + static_cast<size_t>(cy) * static_cast<size_t>(cells_x);
-    LevelArea span{0, 0, area.y_begin + cy * L.cell_px, 0};
-    span.y_end = std::min(span.y_begin + L.cell_px, area.y_end);
+    const int yb = y_begin + cy * L.cell_px, ye = std::min(yb + L.cell_px, y_end);
     int first = -1, last = -1;
-    for (int cx = 0; cx < cells_x; ++cx) {
-      const int xb = area.x_begin + cx * L.cell_px, xe = std::min(xb + L.cell_px, area.x_end);
-      if (row_cells[cx] == kHasCorner || !cell_in_mask(L, mask, {xb, xe, span.y_begin, span.y_end})) continue;
-      row_cells[cx] = kSearchLow;
-      if (first < 0) first = cx;
-      last = cx;
-    }
+    mark_cells_to_search(L, mask, yb, ye, cells_x, row_cells, first, last);
     if (first < 0) continue;
-    span.x_begin = area.x_begin + first * L.cell_px;
-    span.x_end = std::min(area.x_begin + (last + 1) * L.cell_px, area.x_end);
-    segment_test(L, mask, circle, kFastLowThreshold, span, false, row_cells);
+    segment_test(kFastLowThreshold, x_begin + first * L.cell_px, std::min(x_begin + (last + 1) * L.cell_px, x_end), yb,
+                 ye, false, row_cells);
   }
+
+  nms();
 }
 
-// Whether a cell of this level sees any of the mask (sampled every 4 level pixels): a cell
-// wholly outside it (no depth, or the periphery) is not searched again at the low threshold.
-bool GridOrbExtractor::cell_in_mask(const Level& L, const cv::Mat& mask, const LevelArea& cell) {
-  for (int y = cell.y_begin; y < cell.y_end; y += 4) {
-    const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
-    for (int x = cell.x_begin; x < cell.x_end; x += 4)
-      if (mask_row[L.mask_x[static_cast<size_t>(x)]] != 0) return true;
+// Marks kSearchLow the cells of one row of the grid (rows yb..ye of the level) that found no
+// corner at the full threshold and see any of the mask (sampled every 4 level pixels: a cell
+// wholly outside it, no depth or the periphery, is not searched again); first and last: the
+// span of the marked cells (-1: none).
+void GridOrbExtractor::mark_cells_to_search(const Level& L, const cv::Mat& mask, int yb, int ye, int cells_x,
+                                            int* row_cells, int& first, int& last) {
+  const int x_end = L.image.cols - kBorder;
+  for (int cx = 0; cx < cells_x; ++cx) {
+    if (row_cells[cx] == kHasCorner) continue;
+    const int xb = kBorder + cx * L.cell_px, xe = std::min(xb + L.cell_px, x_end);
+    bool in_mask = false;
+    for (int y = yb; y < ye && !in_mask; y += 4) {
+      const std::uint8_t* mask_row = mask.ptr<std::uint8_t>(L.mask_y[static_cast<size_t>(y)]);
+      for (int x = xb; x < xe && !in_mask; x += 4) in_mask = mask_row[L.mask_x[static_cast<size_t>(x)]] != 0;
+    }
+    if (!in_mask) continue;
+    row_cells[cx] = kSearchLow;
+    if (first < 0) first = cx;
+    last = cx;
   }
-  return false;
 }
 
 void GridOrbExtractor::suppress_non_maxima(Level& L) const {

@@ -98,19 +98,9 @@ class GridOrbExtractor {
   void steer_pattern();
   void build_pyramid(const cv::Mat& gray);
   void build_box_sums(Level& level) const;
-  // A rectangle of a level's pixels, [x_begin, x_end) x [y_begin, y_end).
-  struct LevelArea {
-    int x_begin, x_end, y_begin, y_end;
-  };
   void detect_level(Level& level, const cv::Mat& mask) const;
-  // The FAST segment test at `threshold` over `area` (the active kernel flags the corners), then
-  // each corner's mask and score; appends the corners. With `cells` (one row of the cell grid,
-  // its first cell at kBorder), only corners in cells marked for the low-threshold search.
-  void segment_test(Level& level, const cv::Mat& mask, const std::ptrdiff_t* circle, int threshold,
-                    const LevelArea& area, bool strong, const int* cells) const;
-  void search_low_threshold(Level& level, const cv::Mat& mask, const std::ptrdiff_t* circle,
-                            const LevelArea& area) const;
-  static bool cell_in_mask(const Level& level, const cv::Mat& mask, const LevelArea& cell);
+  static void mark_cells_to_search(const Level& level, const cv::Mat& mask, int yb, int ye, int cells_x,
+                                   int* row_cells, int& first, int& last);
   void suppress_non_maxima(Level& level) const;
   void select_level(Level& level);
   void describe_level(const Level& level, int octave, Features& out) const;
