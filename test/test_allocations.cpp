@@ -77,11 +77,16 @@ struct Counter {
   long bytes() const { return g_bytes.load() - start_bytes; }
 };
 
+void* volatile g_escape;
+
 TEST(Allocations, CountingAllocatorSeesAllocations) {
-  // The probe itself must work, or a zero below would prove nothing.
+  // The probe itself must work, or a zero below would prove nothing. The pointers escape
+  // through a volatile, or the compiler may leave out an allocation freed unused.
   const Counter c;
   auto* p = new std::vector<int>(1000);
+  g_escape = p;
   void* q = std::malloc(64);
+  g_escape = q;
   std::free(q);
   delete p;
   EXPECT_GE(c.allocations(), 3);

@@ -23,7 +23,7 @@ class FaultyFeed final : public FrameFeed {
  public:
   enum class Fault { Throw, WrongTypes };
   FaultyFeed(const Config& config, int at, Fault fault)
-      : inner_(open_frame_feed(std::string("tum:") + RGBDO_TEST_DATA_DIR, config, config.sensor, 0)), at_(at), fault_(fault) {}
+      : inner_(open_frame_feed("tum:" RGBDO_TEST_DATA_DIR, config, config.sensor, 0)), at_(at), fault_(fault) {}
   FeedState next(RgbdFrame& frame, std::string& problem) override {
     const FeedState state = inner_->next(frame, problem);
     if (state == FeedState::Frame && read_++ == at_) {
