@@ -186,14 +186,14 @@ void converge_over(const std::string& name, const std::function<std::string(cons
                                         "--expect-converged", "--loss", "0.05", "--reorder", "0.03", "--garbage", "0.3",
                                         "--seed", "7", "--idle-exit-ms", "3000", "--max-ms", "400000",
                                         // PX4 asks at 10 Hz; its estimator needs 500 used samples, which
-                                        // at 50 Hz take 10 s instead of 50: the same rules, a fifth the wait.
-                                        "--timesync-hz", "50"};
+                                        // at 100 Hz take 5 s instead of 50: the same rules, a tenth the wait.
+                                        "--timesync-hz", "100"};
   args.insert(args.end(), common.begin(), common.end());
   const pid_t sim = start_node(kCheckDir, "autopilot_sim.mjs", args, inherit_fd);
   after_start();
   ASSERT_TRUE(wait_for_file(dir / "ready", 30)) << "simulator not ready";
   const std::string link = link_for(dir);
-  // 500 used samples at 50 Hz take 10 s and more: the limit only ends a run that never converges.
+  // 500 used samples at 100 Hz take 5 s and more: the limit only ends a run that never converges.
   const ProgramRun run =
       run_program(link, dir / "odometry.csv", name, [&] { return fs::exists(dir / "converged"); }, 300);
   after_run();

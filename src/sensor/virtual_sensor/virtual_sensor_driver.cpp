@@ -80,6 +80,43 @@ struct Timeline {
 
 // Colour and depth images of the recording in time order, read by the program's own TUM
 // reader (io/tum_sequence.hpp); empty when the recording cannot be read.
+// A recording's frames as the device delivers them (RGB888, depth in 100 um), decoded from
+// their PNG files. A looped recording is decoded before it starts playing and kept when it
+// fits in kKeptBytes (the bundled 40 frames: 61 MB): a soak's passes then cost what the
+// program under test does, not the player's decoding, and every pass reaches the reader as
+// soon after its due time as the others. A frame of another size than the device's is none
+// (an empty image: the reader sees the gap in the indices), a huge one refused from its PNG
+// header before it is decoded.
+class RecordedImages {
+ public:
+  RecordedImages(const std::vector<Event>& events, int loops) : events_(events) {
+    if (loops > 1 && events.size() * kFrameBytes <= kKeptBytes)
+      for (const Event& e : events) kept_.push_back(decode(e));
+  }
+
+  cv::Mat at(std::size_t i) const { return i < kept_.size() ? kept_[i] : decode(events_[i]); }
+
+ private:
+  static constexpr std::size_t kFrameBytes = std::size_t{kWidth} * kHeight * 3;  // the larger stream's
+  static constexpr std::size_t kKeptBytes = std::size_t{256} << 20;
+
+  static cv::Mat decode(const Event& e) {
+    const auto declared = rgbdo::png_declared_size(e.path);
+    if (declared && (declared->first != std::uint32_t{kWidth} || declared->second != std::uint32_t{kHeight})) return {};
+    cv::Mat image = cv::imread(e.path, e.colour ? cv::IMREAD_COLOR : cv::IMREAD_ANYDEPTH);
+    if (image.empty() || image.cols != kWidth || image.rows != kHeight) return {};
+    if (e.colour) {
+      cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
+    } else {
+      image.convertTo(image, CV_16U, 2.0);  // TUM: 5000 per metre = 0.2 mm; 100 um units: x2, exact
+    }
+    return image;
+  }
+
+  const std::vector<Event>& events_;
+  std::vector<cv::Mat> kept_;
+};
+
 std::vector<Event> read_events(const std::string& dir) {
   std::vector<Event> events;
   try {
@@ -274,6 +311,7 @@ class VirtualDevice : public oni::driver::DeviceBase {
   void play() {
     const std::vector<Event> events = read_events(options_.directory);
     if (events.empty()) return;
+    RecordedImages images(events, options_.loops);
     const std::int64_t t0_ns = events.front().t_ns;
     std::chrono::steady_clock::time_point start;
     bool resumed = false;
@@ -299,7 +337,8 @@ class VirtualDevice : public oni::driver::DeviceBase {
     const std::int64_t pass_ns = (events.back().t_ns - t0_ns + 1'000'000'000 / kFps) / 1000 * 1000;
     if (!resumed) write_clock_file(start, t0_ns, pass_ns);
     for (int pass = 0; pass < options_.loops; ++pass) {
-      for (const Event& e : events) {
+      for (std::size_t i = 0; i < events.size(); ++i) {
+        const Event& e = events[i];
         if (stop_) return;
         const std::int64_t t_ns = e.t_ns + pass * pass_ns;
         if (e.colour && colour_index == options_.disconnect_at && !resumed) {
@@ -322,17 +361,8 @@ class VirtualDevice : public oni::driver::DeviceBase {
         while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         const int frame_number = e.colour ? ++colour_numbered : ++depth_numbered;
         if (e.colour && options_.drop.count(index)) continue;
-        // A frame of another size is dropped (the reader sees the gap in the indices), a huge
-        // one from its PNG header, before it is decoded.
-        const auto declared = rgbdo::png_declared_size(e.path);
-        if (declared && (declared->first != std::uint32_t{kWidth} || declared->second != std::uint32_t{kHeight})) continue;
-        cv::Mat image = cv::imread(e.path, e.colour ? cv::IMREAD_COLOR : cv::IMREAD_ANYDEPTH);
-        if (image.empty() || image.cols != kWidth || image.rows != kHeight) continue;
-        if (e.colour) {
-          cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
-        } else {
-          image.convertTo(image, CV_16U, 2.0);  // TUM: 5000 per metre = 0.2 mm; 100 um units: x2, exact
-        }
+        const cv::Mat image = images.at(i);
+        if (image.empty()) continue;
         std::lock_guard<std::mutex> lock(mutex_);
         VirtualStream* s = e.colour ? colour_ : depth_;
         if (s) s->deliver(image, timestamp_us, frame_number);
