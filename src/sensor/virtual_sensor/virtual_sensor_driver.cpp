@@ -81,8 +81,8 @@ struct Timeline {
 // Colour and depth images of the recording in time order, read by the program's own TUM
 // reader (io/tum_sequence.hpp); empty when the recording cannot be read.
 // A recording's frames as the device delivers them (RGB888, depth in 100 um), decoded from
-// their PNG files. A looped recording is decoded before it starts playing and kept when it
-// fits in kKeptBytes (the bundled 40 frames: 61 MB): a soak's passes then cost what the
+// their PNG files. A looped recording is decoded before it starts playing (when the device
+// is opened) and kept when it fits in kKeptBytes (the bundled 40 frames: 61 MB): a soak's passes then cost what the
 // program under test does, not the player's decoding, and every pass reaches the reader as
 // soon after its due time as the others. A frame of another size than the device's is none
 // (an empty image: the reader sees the gap in the indices), a huge one refused from its PNG
@@ -232,7 +232,8 @@ class VirtualDevice : public oni::driver::DeviceBase {
   VirtualDevice(const OniDeviceInfo& info, Options options, std::shared_ptr<Timeline> timeline,
                 std::function<void()> on_disconnect)
       : info_(info), options_(std::move(options)), timeline_(std::move(timeline)),
-        on_disconnect_(std::move(on_disconnect)) {
+        on_disconnect_(std::move(on_disconnect)), events_(read_events(options_.directory)),
+        images_(events_, options_.loops) {
     colour_modes_[0] = OniVideoMode{ONI_PIXEL_FORMAT_RGB888, kWidth, kHeight, kFps};
     depth_modes_[0] = OniVideoMode{ONI_PIXEL_FORMAT_DEPTH_100_UM, kWidth, kHeight, kFps};
     sensors_[0] = OniSensorInfo{ONI_SENSOR_COLOR, 1, colour_modes_};
@@ -309,9 +310,8 @@ class VirtualDevice : public oni::driver::DeviceBase {
 
   // Plays the recording in real time (scaled by rate) to whichever streams are started.
   void play() {
-    const std::vector<Event> events = read_events(options_.directory);
+    const std::vector<Event>& events = events_;
     if (events.empty()) return;
-    RecordedImages images(events, options_.loops);
     const std::int64_t t0_ns = events.front().t_ns;
     std::chrono::steady_clock::time_point start;
     bool resumed = false;
@@ -361,7 +361,7 @@ class VirtualDevice : public oni::driver::DeviceBase {
         while (!stop_ && seconds_since(start) < due_s) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         const int frame_number = e.colour ? ++colour_numbered : ++depth_numbered;
         if (e.colour && options_.drop.count(index)) continue;
-        const cv::Mat image = images.at(i);
+        const cv::Mat image = images_.at(i);
         if (image.empty()) continue;
         std::lock_guard<std::mutex> lock(mutex_);
         VirtualStream* s = e.colour ? colour_ : depth_;
@@ -383,6 +383,10 @@ class VirtualDevice : public oni::driver::DeviceBase {
   Options options_;
   std::shared_ptr<Timeline> timeline_;
   std::function<void()> on_disconnect_;
+  // Read when the device is opened: a looped recording is decoded then, before a stream asks
+  // for frames (under qemu 80 frames take seconds, longer than a reader waits for its first).
+  const std::vector<Event> events_;
+  const RecordedImages images_;
   OniVideoMode colour_modes_[1], depth_modes_[1];
   OniSensorInfo sensors_[2];
   std::mutex mutex_;
