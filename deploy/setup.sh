@@ -123,6 +123,11 @@ ctest_in() {
 # than on the CPU, its output kept in build/logs/NAME.log; wait_background waits for every
 # one started, and stops the job with the log of the first that failed.
 background_names=() background_pids=()
+# at_lowest_priority COMMAND...: COMMAND (a shell function too) at nice 19.
+at_lowest_priority() {
+  renice -n 19 -p "$BASHPID" >/dev/null
+  "$@"
+}
 in_background() {
   local name=$1
   shift
@@ -148,24 +153,30 @@ run_tests() {
   # The armhf sysroot (downloads and unpacking) comes in while the native build compiles.
   in_background armhf-sysroot deploy/armhf-sysroot.sh "$repo/build/sysroot-armhf"
   # The native build also compares its replay with the armhf binary's (cross_arch_replay_matches).
+  # It builds and runs only what no other stage runs (RGBDO_NATIVE_STAGE, test/CMakeLists.txt):
+  # the studies, the allocation counts and the release program's own checks.
   stage "native build" build build/release -DCMAKE_BUILD_TYPE=Release -DRGBDO_ARMHF_BUILD_DIR="$repo/build/armhf" \
-    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf"
+    -DRGBDO_SYSROOT="$repo/build/sysroot-armhf" -DRGBDO_NATIVE_STAGE=ON
   stage "armhf sysroot (the rest of)" wait_background
   # No benchmarks in the armhf build: no test runs them there (the ARM cost model measures
   # the armhf rgbd-odometry itself). The studies run natively only, and each test program
   # whole, as one process: under qemu a process's start is dear (test/CMakeLists.txt).
   stage "armhf build" build build/armhf -DCMAKE_BUILD_TYPE=Release -DCMAKE_TOOLCHAIN_FILE=toolchains/armhf-cortex-a15.cmake \
     -DRGBDO_SYSROOT="$repo/build/sysroot-armhf" -DRGBDO_BUILD_BENCHMARKS=OFF -DRGBDO_STUDIES=OFF -DRGBDO_TEST_WHOLE_PROGRAMS=ON
-  log "test suite, native release build (x86-64)"
-  stage "native suite" ctest_in build/release native
-  log "test suite, armhf build under qemu-arm-static"
-  stage "armhf suite (qemu)" ctest_in build/armhf armhf
   # Sanitised build: memory errors and undefined behaviour must never land. One clang build
   # carries the suite and the libFuzzer targets (test/fuzz: every parser of outside input; its
   # suite replays their kept crash inputs, then fuzzes each from its seeds for a fixed number
   # of runs with a fixed seed). The tests that load the vendor OpenNI2 libraries, which have no
   # frame pointers, unwind their leak stacks in full (test/CMakeLists.txt, test/lsan.supp).
-  stage "ASan+UBSan+fuzz build" build_sanitized
+  # It compiles at the lowest priority while the native and armhf suites run: they wait on
+  # their recordings' real time for a quarter to a half of it, and the compiler takes only
+  # what they leave (their verdicts rest on counts and order, not on an idle machine).
+  in_background asan-build at_lowest_priority build_sanitized
+  log "test suite, native release build (x86-64)"
+  stage "native suite" ctest_in build/release native
+  log "test suite, armhf build under qemu-arm-static"
+  stage "armhf suite (qemu)" ctest_in build/armhf armhf
+  stage "ASan+UBSan+fuzz build (the rest of)" wait_background
   log "test suite and bounded fuzzing, AddressSanitizer + UndefinedBehaviorSanitizer"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" stage "ASan+UBSan suite" ctest_in build/sanitize sanitize
