@@ -78,15 +78,13 @@ struct Timeline {
   }
 };
 
-// Colour and depth images of the recording in time order, read by the program's own TUM
-// reader (io/tum_sequence.hpp); empty when the recording cannot be read.
 // A recording's frames as the device delivers them (RGB888, depth in 100 um), decoded from
 // their PNG files. A looped recording is decoded before it starts playing (when the device
-// is opened) and kept when it fits in kKeptBytes (the bundled 40 frames: 61 MB): a soak's passes then cost what the
-// program under test does, not the player's decoding, and every pass reaches the reader as
-// soon after its due time as the others. A frame of another size than the device's is none
-// (an empty image: the reader sees the gap in the indices), a huge one refused from its PNG
-// header before it is decoded.
+// is opened) and kept when it fits in kKeptBytes (the bundled 40 frames: 61 MB): a soak's
+// passes then cost what the program under test does, not the player's decoding, and every
+// pass reaches the reader as soon after its due time as the others. A frame of another size
+// than the device's is none (an empty image: the reader sees the gap in the indices), a huge
+// one refused from its PNG header before it is decoded.
 class RecordedImages {
  public:
   RecordedImages(const std::vector<Event>& events, int loops) : events_(events) {
@@ -117,6 +115,8 @@ class RecordedImages {
   std::vector<cv::Mat> kept_;
 };
 
+// Colour and depth images of the recording in time order, read by the program's own TUM
+// reader (io/tum_sequence.hpp); empty when the recording cannot be read.
 std::vector<Event> read_events(const std::string& dir) {
   std::vector<Event> events;
   try {
