@@ -178,8 +178,11 @@ run_tests() {
   stage "armhf suite (qemu)" ctest_in build/armhf armhf
   stage "ASan+UBSan+fuzz build (the rest of)" wait_background
   log "test suite and bounded fuzzing, AddressSanitizer + UndefinedBehaviorSanitizer"
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp" stage "ASan+UBSan suite" ctest_in build/sanitize sanitize
+  export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    LSAN_OPTIONS=suppressions="$repo/test/lsan.supp"
+  # The live gyro test measures a latency that a load starting or stopping beside it moves
+  # (test/CMakeLists.txt): it runs first, alone, before the TSan build starts beside the rest.
+  stage "ASan+UBSan live gyro test (alone)" ctest_in build/sanitize sanitize-gyro -L alone
   # ThreadSanitizer: data races and lock-order inversions in the threaded pipeline, the
   # hand-overs, the worker pool, the links and the device clock must never land. Reports
   # inside the vendor libraries we do not build are suppressed by library name
@@ -187,15 +190,16 @@ run_tests() {
   # discovery). Every test that starts a thread runs here, the live ones too: they stop on
   # events and assert counts and order, so TSan's 5-15x slowdown (or a busy machine) changes
   # no verdict. The test programs that never start a thread are not built here
-  # (test/CMakeLists.txt: rgbdo_single_threaded_tests).
-  export TSAN_OPTIONS="suppressions=$repo/test/tsan.supp halt_on_error=1 second_deadlock_stack=1"
+  # (test/CMakeLists.txt: rgbdo_single_threaded_tests), nor the studies (run natively).
   # clang's TSan: measured here, it builds in 1.7 min against GCC's 2.6 and runs the suite in
-  # about half the time.
-  CC=clang CXX=clang++ stage "TSan build" build build/tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE_THREAD=ON \
-    -DRGBDO_BUILD_BENCHMARKS=OFF -DRGBDO_TEST_WHOLE_PROGRAMS=ON
+  # about half the time. It compiles at the lowest priority while the ASan suite runs, whose
+  # live tests leave a fifth of the two cores idle.
+  in_background tsan-build at_lowest_priority build_thread_sanitized
+  stage "ASan+UBSan suite" ctest_in build/sanitize sanitize -LE alone
+  unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
+  stage "TSan build (the rest of)" wait_background
   log "test suite, ThreadSanitizer"
-  stage "TSan suite" ctest_in build/tsan tsan
-  unset TSAN_OPTIONS
+  TSAN_OPTIONS=$tsan_options stage "TSan suite" ctest_in build/tsan tsan
   stage_report
 }
 
@@ -204,6 +208,14 @@ run_tests() {
 build_sanitized() {
   CC=clang CXX=clang++ targets="$*" build build/sanitize -DRGBDO_FUZZ=ON -DRGBDO_BUILD_BENCHMARKS=OFF \
     -DRGBDO_STUDIES=OFF -DRGBDO_TEST_WHOLE_PROGRAMS=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
+}
+
+# build_thread_sanitized: the clang ThreadSanitizer build of the threaded test programs (its
+# options reach the programs run at build time: test discovery).
+tsan_options="suppressions=$repo/test/tsan.supp halt_on_error=1 second_deadlock_stack=1"
+build_thread_sanitized() {
+  TSAN_OPTIONS=$tsan_options CC=clang CXX=clang++ build build/tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRGBDO_SANITIZE_THREAD=ON \
+    -DRGBDO_BUILD_BENCHMARKS=OFF -DRGBDO_STUDIES=OFF -DRGBDO_TEST_WHOLE_PROGRAMS=ON
 }
 
 # The test command's bounded runs again, with seeds FIRST..LAST: the fixed seed fixes the run
