@@ -36,7 +36,13 @@ FeedState OpenNiFeed::next(RgbdFrame& frame, std::string& problem) {
     problem = interrupted_ ? "interrupted" : "the sensor is not open";
     return interrupted_ ? FeedState::End : FeedState::Lost;
   }
-  if (source->next(frame, problem)) {
+  bool delivered = false;
+  try {
+    delivered = source->next(frame, problem);
+  } catch (const SourceError& e) {  // the streams would not start: lost like a sensor that stops
+    problem = e.what();
+  }
+  if (delivered) {
     ++delivered_;
     return FeedState::Frame;
   }

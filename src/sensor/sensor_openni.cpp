@@ -53,8 +53,9 @@ openni::VideoMode choose_mode(const openni::SensorInfo& info, int w, int h, int 
 // Colour frames a just-started live stream numbered before `first_index`, the first one read.
 // OpenNI2's drivers number a created stream's frames from 1 (its PS1080 driver for the Xtion
 // and Carmine does, as do its test driver and the virtual sensor), and a stream keeps only its
-// newest frame: those the device sent before the reader first looked (a slow start-up, a
-// loaded machine) were replaced unread, and are counted as the sensor's drops are. An index
+// newest frame: those the device sent before the reader first looked (a device that dropped
+// its first frames, a reader stalled right after the start) were replaced unread, and are
+// counted as the sensor's drops are. An index
 // beyond ten seconds of frames is a device that numbers otherwise (a counter that does not
 // restart with the stream): nothing is known of what it skipped, and nothing is counted.
 int frames_numbered_before(int first_index, int fps) {
@@ -97,6 +98,7 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   // and the first is overwritten before it is read (the likely cause of frames lost from a
   // playback under load).
   bool playback = false;
+  bool started = false;  // the streams (start_streams)
   int colour_frames_in_file = 0, colour_frames_read = 0, depth_frames_in_file = 0;
 
   // Called on an OpenNI2 thread when any device goes away.
@@ -121,6 +123,7 @@ struct OpenNiSource::Impl : openni::OpenNI::DeviceDisconnectedListener {
   DepthSlot* nearest_depth(std::int64_t t);
   bool earlier_depth_is_nearest(std::int64_t t);
   int wait_for_stream(openni::VideoStream** streams, int budget_ms);  // both streams
+  void start_streams();
   bool collect(cv::Mat& gray, InHand& hand, std::string& problem);
   void store_depth(const openni::VideoFrameRef& frame, std::int64_t t);
   bool take_colour(const openni::VideoFrameRef& frame, std::int64_t t, cv::Mat& gray, InHand& hand);
@@ -219,6 +222,15 @@ bool OpenNiSource::Impl::collect(cv::Mat& gray, InHand& hand, std::string& probl
     if (take_colour(frame, t, gray, hand)) break;
   }
   return true;
+}
+
+// Started at the first read, not when the device opens: a stream keeps only its newest frame,
+// so whatever the program does between the two (its link, its pipeline's buffers and threads:
+// tens of ms) would replace the first frames unread.
+void OpenNiSource::Impl::start_streams() {
+  if (colour.start() != openni::STATUS_OK || depth.start() != openni::STATUS_OK)
+    throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
+  started = true;
 }
 
 void OpenNiSource::Impl::store_depth(const openni::VideoFrameRef& frame, std::int64_t t) {
@@ -352,10 +364,6 @@ OpenNiSource::OpenNiSource(const OpenNiOptions& options) : impl_(std::make_uniqu
     throw SourceError("cannot record to '" + options.record_path + "': " + openni::OpenNI::getExtendedError());
   if (openni::OpenNI::addDeviceDisconnectedListener(impl_.get()) != openni::STATUS_OK)
     throw SourceError("cannot watch the OpenNI2 device for disconnection");
-  if (s.colour.start() != openni::STATUS_OK || s.depth.start() != openni::STATUS_OK) {
-    openni::OpenNI::removeDeviceDisconnectedListener(impl_.get());
-    throw SourceError(std::string("cannot start the OpenNI2 streams: ") + openni::OpenNI::getExtendedError());
-  }
   for (auto& slot : s.depth_history) slot.depth_m.create(options.height, options.width, CV_32FC1);
   s.pending_gray.create(options.height, options.width, CV_8UC1);  // no allocation when one first waits
 }
@@ -390,6 +398,7 @@ std::string OpenNiSource::description() const {
 
 bool OpenNiSource::next(RgbdFrame& out, std::string& problem) {
   auto& s = *impl_;
+  if (!s.started) s.start_streams();
   Impl::InHand hand;
   if (s.has_pending) s.take_pending(out.gray, hand);  // the frame that came while the last one waited
   if (!hand.have_colour && s.playback && s.colour_frames_read >= s.colour_frames_in_file) {

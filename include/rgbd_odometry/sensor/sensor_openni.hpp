@@ -37,14 +37,16 @@ std::vector<DeviceDescription> list_openni_devices();
 
 class OpenNiSource {
  public:
-  // Opens and starts the device; throws SourceError naming the device and the problem.
+  // Opens the device and sets its streams up; throws SourceError naming the device and the
+  // problem. The streams start at the first next().
   explicit OpenNiSource(const OpenNiOptions& options);
   ~OpenNiSource();
   OpenNiSource(const OpenNiSource&) = delete;
   OpenNiSource& operator=(const OpenNiSource&) = delete;
 
   // The next colour frame with its depth. False when the device stopped delivering (no frame
-  // within the timeout, or disconnected); `problem` then says which.
+  // within the timeout, or disconnected); `problem` then says which. The first call starts the
+  // streams, and throws SourceError if they cannot start.
   bool next(RgbdFrame& out, std::string& problem);
 
   // Makes a next() in progress (or the next one) return false promptly; thread-safe.

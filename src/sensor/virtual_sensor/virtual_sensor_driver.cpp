@@ -1,7 +1,8 @@
 // An OpenNI2 driver plugin that presents a recorded TUM RGB-D sequence as a live device:
 // a colour stream (RGB888) and a depth stream (DEPTH_100_UM, registered to colour, which is
-// how TUM recorded it), each frame delivered at its recorded time (scaled by `rate`), with
-// device timestamps in microseconds from the first frame and per-stream frame indices (from 1).
+// how TUM recorded it), each frame delivered at its recorded time (scaled by `rate`) from when
+// the first stream starts, with device timestamps in microseconds from the first frame and
+// per-stream frame indices (from 1).
 // OpenNI2 loads it like any vendor driver, so code under test reads it exactly as it reads a
 // PrimeSense sensor.
 //
@@ -132,9 +133,10 @@ std::vector<Event> read_events(const std::string& dir) {
 
 class VirtualStream : public oni::driver::StreamBase {
  public:
-  explicit VirtualStream(OniSensorType type) : type_(type) {}
+  VirtualStream(OniSensorType type, std::function<void()> on_start) : type_(type), on_start_(std::move(on_start)) {}
   OniStatus start() override {
     running_ = true;
+    on_start_();
     return ONI_STATUS_OK;
   }
   void stop() override { running_ = false; }
@@ -224,6 +226,7 @@ class VirtualStream : public oni::driver::StreamBase {
     return ONI_STATUS_OK;
   }
   OniSensorType type_;
+  std::function<void()> on_start_;
   std::atomic<bool> running_{false};
 };
 
@@ -257,9 +260,12 @@ class VirtualDevice : public oni::driver::DeviceBase {
   oni::driver::StreamBase* createStream(OniSensorType type) override {
     if (type != ONI_SENSOR_COLOR && type != ONI_SENSOR_DEPTH) return nullptr;
     std::lock_guard<std::mutex> lock(mutex_);
-    auto* s = new VirtualStream(type);
+    // The recording starts playing when a stream first starts, as a sensor starts sending
+    // then: a reader that starts its streams late loses nothing.
+    auto* s = new VirtualStream(type, [this] {
+      std::call_once(play_once_, [this] { player_ = std::thread([this] { play(); }); });
+    });
     (type == ONI_SENSOR_COLOR ? colour_ : depth_) = s;
-    if (!player_.joinable()) player_ = std::thread([this] { play(); });
     return s;
   }
   void destroyStream(oni::driver::StreamBase* stream) override {
@@ -392,6 +398,9 @@ class VirtualDevice : public oni::driver::DeviceBase {
   std::mutex mutex_;
   VirtualStream* colour_ = nullptr;
   VirtualStream* depth_ = nullptr;
+  // Started once, by the first stream's start(): not under mutex_, which the player holds
+  // while it hands OpenNI2 a frame, while OpenNI2 may hold its own lock around a start().
+  std::once_flag play_once_;
   std::thread player_;
   std::atomic<bool> stop_{false};
   bool resumed_ = false;
