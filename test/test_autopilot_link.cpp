@@ -37,6 +37,7 @@
 
 #include "node_checker.hpp"
 #include "rgbd_odometry/app/run.hpp"
+#include "rgbd_odometry/link/link_config.hpp"
 
 namespace rgbdo {
 namespace {
@@ -210,14 +211,14 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   EXPECT_EQ(sim_rc, 0) << result;
 
   // PX4's view: converged, every answer causal, the offset within what its round trips allow
-  // (each sample within half its round trip: a fraction of a millisecond on an idle machine,
-  // milliseconds under ThreadSanitizer beside a build; the bound follows the machine, the
-  // stamps' correctness does not).
+  // (each sample within half its round trip, the filter's weights summing to about 3.9 in
+  // absolute value: 0.85-0.99 ms on an idle machine, 1.6-1.9 ms under ThreadSanitizer beside a
+  // build, at most 19 ms where PX4 drops round trips of 10 ms or more). The bound follows the
+  // machine; the stamps' correctness does not.
   EXPECT_GE(json_number(result, "sequence"), 500) << result;
   const double error_us = json_number(result, "offsetErrorUs");
   const double bound_us = json_number(result, "offsetBoundUs");
   EXPECT_LE(std::abs(error_us), bound_us) << result;
-  EXPECT_LT(bound_us, 5000) << "PX4 uses round trips under 10 ms: " << result;
   EXPECT_EQ(json_number(result, "causalityViolations"), 0) << result;
   EXPECT_GT(json_number(result, "garbageBytes"), 0) << "the link was unkind: " << result;
   EXPECT_GT(json_number(result, "corruptFrames"), 0) << result;
@@ -279,10 +280,11 @@ void converge_over(const std::string& name, const std::function<std::string(cons
   EXPECT_NE(run.output.find("link: autopilot PX4 (system 1, component 1) heard"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("link: clock offset to the autopilot +1234.5"), std::string::npos) << run.output;
   // Ours is the sample with the shortest round trip: within half of it (+5 us, the printed
-  // round trip's rounding), however loaded the machine.
+  // round trip's rounding), however loaded the machine, and a round trip the program takes
+  // (link.timesync_max_rtt_ms, 100 ms by default).
   const OurOffset our_clock = our_offset(run.output);
   EXPECT_LE(std::abs(our_clock.error_us), our_clock.round_trip_us / 2 + 5) << run.output;
-  EXPECT_LT(our_clock.round_trip_us, 10000) << run.output;
+  EXPECT_LE(our_clock.round_trip_us, LinkConfig{}.timesync_max_rtt_ms * 1e3) << run.output;
   std::cout << "[ " << name << " ] our estimate of the autopilot's clock: error " << our_clock.error_us << " us, round trip "
             << our_clock.round_trip_us << " us\n";
 }
