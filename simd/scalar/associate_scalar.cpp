@@ -30,15 +30,20 @@ int associate_scalar(const AssociateInput& in, Association* out) {
     const float mx = (R[0] * nx + R[3] * ny) + R[6] * nz;
     const float my = (R[1] * nx + R[4] * ny) + R[7] * nz;
     const float mz = (R[2] * nx + R[5] * ny) + R[8] * nz;
+    // The lever arm: the midpoint of the point and its target, in the current frame.
+    const float hx = ((R[0] * dx + R[3] * dy) + R[6] * dz) * 0.5f;
+    const float hy = ((R[1] * dx + R[4] * dy) + R[7] * dz) * 0.5f;
+    const float hz = ((R[2] * dx + R[5] * dy) + R[8] * dz) * 0.5f;
+    const float ax = px - hx, ay = py - hy, az = pz - hz;
     Association& a = out[count++];
     a.r = (nx * dx + ny * dy) + nz * dz;
     a.w = 1.0f / ((sz_c * sz_c + sz_p * sz_p) + in.floor2);
     a.j[0] = mx;
     a.j[1] = my;
     a.j[2] = mz;
-    a.j[3] = py * mz - pz * my;
-    a.j[4] = pz * mx - px * mz;
-    a.j[5] = px * my - py * mx;
+    a.j[3] = ay * mz - az * my;
+    a.j[4] = az * mx - ax * mz;
+    a.j[5] = ax * my - ay * mx;
     a.curr_index = in.first_index + in.step * i;
     a.prev_index = k;
   }

@@ -71,6 +71,10 @@ int associate_avx2(const AssociateInput& in, Association* out) {
     const __m256 mx = dot3(R[0], nx, R[3], ny, R[6], nz);
     const __m256 my = dot3(R[1], nx, R[4], ny, R[7], nz);
     const __m256 mz = dot3(R[2], nx, R[5], ny, R[8], nz);
+    const __m256 half = _mm256_set1_ps(0.5f);
+    const __m256 ax = _mm256_sub_ps(px, _mm256_mul_ps(dot3(R[0], dx, R[3], dy, R[6], dz), half));
+    const __m256 ay = _mm256_sub_ps(py, _mm256_mul_ps(dot3(R[1], dx, R[4], dy, R[7], dz), half));
+    const __m256 az = _mm256_sub_ps(pz, _mm256_mul_ps(dot3(R[2], dx, R[5], dy, R[8], dz), half));
     alignas(32) float v[8][8];
     alignas(32) std::int32_t ks[8];
     _mm256_store_ps(v[0], _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, dx), _mm256_mul_ps(ny, dy)), _mm256_mul_ps(nz, dz)));
@@ -78,9 +82,9 @@ int associate_avx2(const AssociateInput& in, Association* out) {
     _mm256_store_ps(v[2], mx);
     _mm256_store_ps(v[3], my);
     _mm256_store_ps(v[4], mz);
-    _mm256_store_ps(v[5], _mm256_sub_ps(_mm256_mul_ps(py, mz), _mm256_mul_ps(pz, my)));
-    _mm256_store_ps(v[6], _mm256_sub_ps(_mm256_mul_ps(pz, mx), _mm256_mul_ps(px, mz)));
-    _mm256_store_ps(v[7], _mm256_sub_ps(_mm256_mul_ps(px, my), _mm256_mul_ps(py, mx)));
+    _mm256_store_ps(v[5], _mm256_sub_ps(_mm256_mul_ps(ay, mz), _mm256_mul_ps(az, my)));
+    _mm256_store_ps(v[6], _mm256_sub_ps(_mm256_mul_ps(az, mx), _mm256_mul_ps(ax, mz)));
+    _mm256_store_ps(v[7], _mm256_sub_ps(_mm256_mul_ps(ax, my), _mm256_mul_ps(ay, mx)));
     _mm256_store_si256(reinterpret_cast<__m256i*>(ks), k);
     for (int l = 0; l < 8; ++l)
       if ((mask >> l) & 1) {

@@ -25,7 +25,12 @@ struct AssociateInput {
 };
 
 // One association: q = R p + t lands on the previous grid's sample k, d = q - point_k,
-// r = n_k . d, w = 1 / ((c Z_p^2)^2 + (c Z_k^2)^2 + floor2), j = (m, p x m) with m = R^T n_k.
+// r = n_k . d, w = 1 / ((c Z_p^2)^2 + (c Z_k^2)^2 + floor2), j = (m, a x m) with m = R^T n_k
+// and the lever arm a = p - R^T d / 2, the midpoint of the point and its target in the current
+// frame. The converged rotation solves sum w (a x m) r = 0; with the lever arm at p alone that
+// equation leans on the current frame's noisy point and not on the previous one's, so under
+// depth noise a pair and the same pair reversed solve different equations and their biases add
+// up there and back instead of cancelling. At the midpoint both frames weigh alike.
 struct Association {
   float r, w;
   float j[6];
