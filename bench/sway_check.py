@@ -3,7 +3,7 @@
 
     bench/sway_check.py SOURCE_DIR --exe build/release/rgbd-odometry [--config CFG] \
         [--first A] [--last B] [--cycles 10] [--depth-noise 1.425e-3] [--colour-noise 2] \
-        [--still N] [--seed 1] [--keep DIR] [-- PROGRAM OPTIONS...]
+        [--still N] [--seed 1] [--keep DIR] [--expect-within MM,DEG] [-- PROGRAM OPTIONS...]
 
 Writes a copy of SOURCE_DIR's images A..B played forth and back CYCLES times (A..B, B-1..A: each
 cycle ends on image A, where the true path is back at its start), every visit of an image with
@@ -13,6 +13,8 @@ A alone is played N times instead (a camera at rest, fresh noise each frame). Th
 program on it with --trajectory and prints, for each cycle's end, how far the reported pose is
 from the start (translation, rotation): the drift a hovering drone would see. A frame-to-frame
 odometry whose pairs there and back do not cancel walks away by the same amount every cycle.
+With --expect-within, it exits 1 when the last cycle's end is further than MM millimetres or DEG
+degrees from the start (or has no pose): a test's bound.
 
 Noise-free visits (--depth-noise 0 --colour-noise 0) replay the recorded images themselves: a
 synchronous sensor's recording (ICL-NUIM) is the same played backwards; a Kinect recording is not
@@ -156,6 +158,7 @@ def main():
     parser.add_argument("--colour-noise", type=float, default=2.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--keep", help="write the swayed copy here (default: a temporary directory)")
+    parser.add_argument("--expect-within", metavar="MM,DEG", help="exit 1 if the last cycle's end is further")
     parser.add_argument("--self-test", action="store_true")
     parser.add_argument("program_options", nargs=argparse.REMAINDER)
     args = parser.parse_args()
@@ -164,6 +167,14 @@ def main():
         return
     if not args.source or not args.exe:
         parser.error("SOURCE_DIR and --exe are required")
+    bound = None
+    if args.expect_within:
+        try:
+            bound = tuple(float(x) for x in args.expect_within.split(","))
+        except ValueError:
+            bound = ()
+        if len(bound) != 2:
+            parser.error(f"--expect-within takes MM,DEG, not '{args.expect_within}'")
     if args.still > 0:
         order, ends = [args.first] * args.still, [args.still - 1]
     else:
@@ -181,7 +192,7 @@ def main():
         if run.returncode != 0:
             sys.exit(f"sway_check: the program failed ({run.returncode}):\n{run.stdout}\n{run.stderr}")
         rows = report(read_trajectory(trajectory), ends)
-    what = f"still on image {args.first}, {args.still} frames" if args.still > 0 else \
+    what = f"still on image {args.first}" if args.still > 0 else \
         f"images {args.first}-{args.last} forth and back {args.cycles} times"
     print(f"sway: {what}, {len(order)} frames; noise: depth {args.depth_noise:g} Z^2, colour {args.colour_noise:g}")
     for c, mm, deg in rows:
@@ -189,6 +200,13 @@ def main():
     if rows:
         c, mm, deg = rows[-1]
         print(f"after {c} cycles: {mm:.2f} mm, {deg:.3f} deg from the start")
+    if bound is not None:
+        if not rows or rows[-1][0] != len(ends):
+            sys.exit("sway_check: the last cycle's end has no pose (a failed pair there)")
+        if not (rows[-1][1] <= bound[0] and rows[-1][2] <= bound[1]):
+            sys.exit(f"sway_check: {rows[-1][1]:.2f} mm, {rows[-1][2]:.3f} deg from the start, "
+                     f"beyond {bound[0]:g} mm, {bound[1]:g} deg")
+        print(f"within {bound[0]:g} mm and {bound[1]:g} deg")
 
 
 if __name__ == "__main__":
