@@ -16,6 +16,7 @@
 #include "rgbd_odometry/pipeline/integrate.hpp"
 #include "rgbd_odometry/pipeline/odometry.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/keyframes.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/app/config_file.hpp"
@@ -126,10 +127,13 @@ TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {
 
   FrameExtractor extractor(config);
   PairEstimator estimator(config);
+  KeyframeTracker keyframes(config);
   TrajectoryIntegrator integrator;
   ProcessedFrame prev, curr;
   constexpr size_t kWarmUp = 10;
-  long pair_allocations = 0, integrate_allocations = 0, extract_allocations = 0, extract_bytes = 0;
+  long pair_allocations = 0, keyframe_allocations = 0, integrate_allocations = 0, extract_allocations = 0,
+       extract_bytes = 0;
+  int keyframes_made = 0;
   int measured = 0, ok = 0;
   extractor.extract(frames[0], prev);
   for (size_t i = 1; i < frames.size(); ++i) {
@@ -138,8 +142,12 @@ TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {
     const long ea = extract.allocations(), eb = extract.bytes();
 
     const Counter pair;
-    const PairResult r = estimator.estimate(prev, curr);
+    PairResult r = estimator.estimate(prev, curr);
     const long pa = pair.allocations();
+
+    const Counter keyframe;
+    keyframes.update(curr, r);
+    const long ka = keyframe.allocations();
 
     const Counter integrate;
     if (r.status == Status::Ok) integrator.add(r.T_prev_curr);
@@ -150,6 +158,8 @@ TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {
     if (i <= kWarmUp) continue;
     ++measured;
     pair_allocations += pa;
+    keyframe_allocations += ka;
+    keyframes_made += r.keyframe.created;
     integrate_allocations += ia;
     extract_allocations += ea;
     extract_bytes += eb;
@@ -157,6 +167,9 @@ TEST(Allocations, PairStageAndIntegrationAllocateNothingAfterWarmUp) {
   EXPECT_EQ(ok, static_cast<int>(frames.size()) - 1);
   EXPECT_EQ(pair_allocations, 0) << "matching, back-projection, RANSAC or covariance allocated";
   EXPECT_EQ(integrate_allocations, 0);
+  // New keyframes too (their slots are sized at construction).
+  EXPECT_EQ(keyframe_allocations, 0) << "the keyframe's measurement or a new keyframe allocated";
+  EXPECT_GE(keyframes_made, 2) << "the frames after the warm-up made too few keyframes to tell";
   std::printf("feature extraction (OpenCV ORB + undistortPoints) per frame after warm-up: %.1f allocations, %.1f KiB\n",
               static_cast<double>(extract_allocations) / measured,
               static_cast<double>(extract_bytes) / measured / 1024.0);

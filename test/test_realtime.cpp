@@ -13,6 +13,7 @@
 #include "rgbd_odometry/sensor/frame_feed.hpp"
 #include "rgbd_odometry/runtime/realtime.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
+#include "rgbd_odometry/pipeline/keyframes.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/app/config_file.hpp"
@@ -177,6 +178,7 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
   };
   FrameExtractor extractor(config);
   PairEstimator estimator(config);
+  KeyframeTracker keyframes(config);
   int compared = 0;
   for (const PairOutput& o : live.outputs) {
     if (!o.has_pair) continue;
@@ -185,7 +187,8 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
     ProcessedFrame prev, curr;
     extractor.extract(recorded_frame(o.t_frame_ns - (a->t_curr_ns - a->t_prev_ns)), prev);
     extractor.extract(recorded_frame(o.t_frame_ns), curr);
-    const PairResult b = estimator.estimate(prev, curr);
+    PairResult b = estimator.estimate(prev, curr);
+    if (!PairEstimator::dropped_frame(b)) keyframes.update(curr, b);
     EXPECT_EQ(a->t_curr_ns - a->t_prev_ns, b.t_curr_ns - b.t_prev_ns) << "dt, pair " << compared;
     EXPECT_EQ(a->status, b.status) << "pair " << compared;
     EXPECT_EQ(a->inliers, b.inliers) << "pair " << compared;

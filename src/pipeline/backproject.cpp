@@ -4,6 +4,8 @@
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 
+#include "rgbd_odometry/core/geometry.hpp"
+
 namespace rgbdo {
 namespace {
 
@@ -85,6 +87,26 @@ void KeypointBackProjector::compute(const std::vector<cv::KeyPoint>& keypoints, 
   }
 }
 
+MotionPrior motion_from(const Eigen::Isometry3d& T_prev_curr, double dt_s) {
+  MotionPrior m;
+  m.velocity_mps = T_prev_curr.translation() / dt_s;
+  m.angular_velocity_radps = rotation_vector(T_prev_curr.linear()) / dt_s;
+  return m;
+}
+
+double depth_at_colour_instant(double z, const Eigen::Vector3d& p, const Eigen::Vector2d& depth_gradient,
+                               const Eigen::Vector2d& pixel_velocity, double offset_s, const MotionPrior& motion) {
+  const double z_rate = -(motion.velocity_mps + motion.angular_velocity_radps.cross(p)).z();
+  return z + offset_s * (z_rate - depth_gradient.dot(pixel_velocity));
+}
+
+Eigen::Vector2d static_pixel_velocity(const Eigen::Vector3d& p, const MotionPrior& motion, double fx, double fy) {
+  // In the moving camera a static point moves by -(v + w x p); its projection x/z, y/z with it.
+  const Eigen::Vector3d dp = -(motion.velocity_mps + motion.angular_velocity_radps.cross(p));
+  const double z2 = p.z() * p.z();
+  return {fx * (dp.x() * p.z() - p.x() * dp.z()) / z2, fy * (dp.y() * p.z() - p.y() * dp.z()) / z2};
+}
+
 void build_point_pairs(const std::vector<Match>& matches, const KeypointGeometry& prev, const FrameTimes& prev_times,
                        const KeypointGeometry& curr, const FrameTimes& curr_times, const MotionPrior* prior,
                        PointPairs& out) {
@@ -94,13 +116,11 @@ void build_point_pairs(const std::vector<Match>& matches, const KeypointGeometry
   const double curr_offset = static_cast<double>(curr_times.t_colour_ns - curr_times.t_depth_ns) * 1e-9;
   const bool compensate = prior != nullptr && dt_colour > 0;
 
-  // Depth at the colour instant, first order in the time offset (see header).
   const auto depth_at_colour_time = [&](double z, const Eigen::Vector2d& xn, const Eigen::Vector2d& gradient,
                                         const Eigen::Vector2d& pixel_velocity, double offset) {
     if (!compensate || offset == 0) return z;
-    const Eigen::Vector3d p(xn.x() * z, xn.y() * z, z);
-    const double z_rate = -(prior->velocity_mps + prior->angular_velocity_radps.cross(p)).z();
-    return z + offset * (z_rate - gradient.dot(pixel_velocity));
+    return depth_at_colour_instant(z, Eigen::Vector3d(xn.x() * z, xn.y() * z, z), gradient, pixel_velocity, offset,
+                                   *prior);
   };
 
   for (size_t k = 0; k < matches.size(); ++k) {

@@ -7,7 +7,8 @@
 
 namespace rgbdo {
 
-OdometryPipeline::OdometryPipeline(const PipelineConfig& config) : extractor_(config), estimator_(config) {}
+OdometryPipeline::OdometryPipeline(const PipelineConfig& config)
+    : extractor_(config), estimator_(config), keyframes_(config) {}
 
 std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
   const auto start = std::chrono::steady_clock::now();
@@ -18,6 +19,7 @@ std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
     result = estimator_.estimate(prev_, curr_);
     result->times.detect_ms = detect_ms;
     if (PairEstimator::dropped_frame(*result)) return result;  // prev_ stays the previous frame
+    keyframes_.update(curr_, *result);
   }
   std::swap(prev_, curr_);  // swap, not copy: buffers are reused frame after frame
   have_prev_ = true;

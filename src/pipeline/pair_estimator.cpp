@@ -20,13 +20,6 @@ using Clock = std::chrono::steady_clock;
 // 99 % point) teaches the learnt sensor constants nothing: see PairEstimator::estimate.
 constexpr double kChi2_6_99 = 16.81;
 
-MotionPrior motion_from(const Eigen::Isometry3d& T_prev_curr, double dt_s) {
-  MotionPrior m;
-  m.velocity_mps = T_prev_curr.translation() / dt_s;
-  m.angular_velocity_radps = rotation_vector(T_prev_curr.linear()) / dt_s;
-  return m;
-}
-
 MotionPrior motion_of(const PairRate& pair) {
   MotionPrior m;
   m.velocity_mps = pair.rate.head<3>();
@@ -367,6 +360,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   const bool learn = !paper_noise_ && xi.dot(cov.ldlt().solve(xi)) >= kChi2_6_99;
   if (learn) learn_keypoint_sigma(prev, curr, curr_geometry);
   if (config_.refinement.enabled && !paper_noise_) fuse_depth_alignment(prev, curr, dt_s, learn, xi, cov, r);
+  r.motion_covariance = cov;
   if (dt_s > 0) add_latency_terms(dt_s, cov);
   r.times.covariance_ms = ms_since(t0);
 

@@ -17,6 +17,7 @@
 #include "rgbd_odometry/pipeline/capture_latency.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/pipeline/keyframes.hpp"
 
 namespace rgbdo {
 namespace {
@@ -72,6 +73,7 @@ class Run {
                   : nullptr),
         extractor_(config, pool_.get()),
         estimator_(config),
+        keyframes_(config),
         capture_clock_(config, gyro) {
     check_cpus_allowed(cpus_);
     for (std::size_t i = 0; i < kProcessedSlots; ++i) free_.push(static_cast<int>(i));
@@ -252,7 +254,10 @@ class Run {
         estimator_.set_latency_sigmas(capture_clock_.latency_sigmas());
         out.result = estimator_.estimate(prev.frame, curr.frame);
       }
-      if (!PairEstimator::dropped_frame(out.result)) capture_clock_.stamp(out.result);
+      if (!PairEstimator::dropped_frame(out.result)) {
+        capture_clock_.stamp(out.result);  // from the frame pair's own rotation, before the keyframe's
+        keyframes_.update(curr.frame, out.result);
+      }
       out.result.times.detect_ms = curr.detect_ms;
     }
     const bool kept = !(out.has_pair && PairEstimator::dropped_frame(out.result));
@@ -335,6 +340,7 @@ class Run {
   std::unique_ptr<WorkerPool> pool_;  // the extraction's helpers (before extractor_: outlives it)
   FrameExtractor extractor_;  // the extraction thread's
   PairEstimator estimator_;   // the estimation thread's
+  KeyframeTracker keyframes_;  // the estimation thread's
   CaptureClock capture_clock_;  // the estimation thread's: when the frames were taken
   std::array<ProcessedSlot, kProcessedSlots> slots_;
   BoundedQueue<int, kProcessedSlots> free_, ready_;

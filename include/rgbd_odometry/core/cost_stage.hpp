@@ -28,11 +28,12 @@ enum class CostStage : std::uint32_t {
   Convert,     // colour to intensity, depth to metres: what a live frame needs too
   Refine,      // the depth maps' coarse clouds and their alignment (pipeline/depth_alignment.hpp)
   Track,       // the matched keypoints' sub-pixel tracking (pipeline/track.hpp)
+  Keyframe,    // the current frame measured against its keyframe (pipeline/keyframes.hpp)
 };
-inline constexpr std::size_t kCostStageCount = 14;
+inline constexpr std::size_t kCostStageCount = 15;
 inline constexpr std::array<const char*, kCostStageCount> kCostStageNames{
     "other", "decode", "mask", "detect", "geometry", "match", "point_pairs", "ransac", "covariance", "pyramid", "corners",
-    "convert", "refine", "track"};
+    "convert", "refine", "track", "keyframe"};
 // The first extra argument of the marker call ("RGBD"): tells a marker from a real getpid.
 inline constexpr std::uint32_t kCostMarkerMagic = 0x52474244u;
 

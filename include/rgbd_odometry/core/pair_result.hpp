@@ -20,6 +20,14 @@ struct StageTimes {  // wall time of each stage for this pair, milliseconds
   double covariance_ms = 0;
 };
 
+// The current frame's keyframe (pipeline/keyframes.hpp).
+struct KeyframeLink {
+  std::uint64_t id = 0;  // 0: none (keyframes off, or the pair failed)
+  int inliers = 0;       // the frame's inliers against it; 0: not measured (a new keyframe, or none held)
+  bool created = false;  // the frame became a new keyframe
+  bool returned = false; // the frame re-attached to an earlier keyframe
+};
+
 struct PairResult {
   // Capture times of the two frames' colour images: their stamps, or, where the latency is
   // measured against the autopilot's gyro, the stamps less the latency (timing.applied_s).
@@ -43,7 +51,11 @@ struct PairResult {
   Eigen::Vector3d depth_rotation = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   std::int64_t t_depth_prev_ns = 0, t_depth_curr_ns = 0;
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
+  KeyframeLink keyframe;
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
+  // The same before the capture latencies' terms: the error of the motion between the two
+  // capture instants, what the keyframes weigh the pair by (pipeline/keyframes.hpp).
+  Matrix6d motion_covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());
   StageTimes times;
 };
 

@@ -61,6 +61,9 @@ struct MotionPrior {
   Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
 };
 
+// The constant velocity that moves the camera by T_prev_curr over dt_s seconds.
+MotionPrior motion_from(const Eigen::Isometry3d& T_prev_curr, double dt_s);
+
 // A frame's capture times (RgbdFrame): intervals on the timeline, host time = t - host_lead_ns.
 struct FrameTimes {
   std::int64_t t_colour_ns = 0;
@@ -76,6 +79,13 @@ struct PointPairs {
   void clear();
   size_t size() const { return prev.size(); }
 };
+
+// A static point's depth seen at p (camera frame) read offset_s seconds away from the instant
+// wanted, carried there to first order (see above): pixel_velocity is its image motion in px/s.
+double depth_at_colour_instant(double z, const Eigen::Vector3d& p, const Eigen::Vector2d& depth_gradient,
+                               const Eigen::Vector2d& pixel_velocity, double offset_s, const MotionPrior& motion);
+// The image motion (px/s) of a static point at p while the camera moves with `motion`.
+Eigen::Vector2d static_pixel_velocity(const Eigen::Vector3d& p, const MotionPrior& motion, double fx, double fy);
 
 // Builds the pairs of all matches whose keypoints have usable depth in both frames.
 // prior == nullptr: depth taken as measured (no timing compensation).

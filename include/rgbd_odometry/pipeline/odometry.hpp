@@ -1,8 +1,9 @@
 #pragma once
 // The fixed pipeline on one thread: feed RGB-D frames in capture order, get one result per
 // consecutive pair. Stages: mask -> detect -> back-project (FrameExtractor, per frame), then
-// match -> point pairs -> RANSAC -> covariance (PairEstimator, per pair). The real-time
-// runtime (runtime/realtime.hpp) runs the two halves on their own threads instead.
+// match -> point pairs -> RANSAC -> covariance (PairEstimator, per pair), then the keyframe's
+// measurement (KeyframeTracker). The real-time runtime (runtime/realtime.hpp) runs the two
+// halves on their own threads instead.
 #include <cstdint>
 #include <optional>
 
@@ -10,6 +11,7 @@
 #include "rgbd_odometry/core/pair_result.hpp"
 #include "rgbd_odometry/pipeline/frame.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
+#include "rgbd_odometry/pipeline/keyframes.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 
 namespace rgbdo {
@@ -24,6 +26,7 @@ class OdometryPipeline {
  private:
   FrameExtractor extractor_;
   PairEstimator estimator_;
+  KeyframeTracker keyframes_;
   ProcessedFrame prev_, curr_;
   bool have_prev_ = false;
 };

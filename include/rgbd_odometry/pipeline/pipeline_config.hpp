@@ -106,6 +106,18 @@ struct RefinementConfig {
   double distrusted_sigma_scale_rotation = 100;
 };
 
+// Keyframes (pipeline/keyframes.hpp): each frame measured against a kept earlier frame as well,
+// so that a camera over one view reports the same place every time it comes back.
+struct KeyframeConfig {
+  bool enabled = true;
+  int kept = 4;  // recent keyframes kept for a return to an earlier view
+  // A keyframe is held while the current frame's inliers against it are at least this share
+  // of those its first measured frame had, and at least twice ransac.min_inliers.
+  double min_inlier_share = 0.5;
+  // The share of the keyframe's disagreement with the frame pairs' prediction taken per frame.
+  double gain = 0.15;
+};
+
 inline constexpr std::array<std::string_view, 2> kCovarianceModels{"physical", "paper"};
 
 struct CovarianceConfig {
@@ -176,6 +188,7 @@ struct PipelineConfig {
   RansacConfig ransac;
   CovarianceConfig covariance;
   RefinementConfig refinement;
+  KeyframeConfig keyframes;
   LatencyConfig latency;
   BodyConfig body;  // the camera's mount (core/camera_mount.hpp): the gyro's rates are the body's
   std::uint64_t seed = 1;  // with the two frames' content, seeds RANSAC and the perturbations (pair_estimator.cpp)
