@@ -68,7 +68,8 @@ std::string pair_line(const PairResult& r, std::size_t index, bool verbose) {
       << r.tracked << " thr "
       << r.inlier_threshold_m * 1e3 << "mm | ms detect " << r.times.detect_ms << " match " << r.times.match_ms
       << " backproject " << r.times.backproject_ms << " ransac " << r.times.ransac_ms << " covariance "
-      << r.times.covariance_ms << (r.rematched ? " | rematched" : "");
+      << r.times.covariance_ms << " keyframe " << r.times.keyframe_ms << (r.rematched ? " | rematched" : "")
+      << " | keyframe " << r.keyframe.id << (r.keyframe.created ? " new" : "") << (r.keyframe.returned ? " return" : "");
   }
   return s.str();
 }
@@ -80,7 +81,11 @@ void PairTallies::add(const PairResult& r) {
     total.backproject_ms += r.times.backproject_ms;
     total.ransac_ms += r.times.ransac_ms;
     total.covariance_ms += r.times.covariance_ms;
+    total.keyframe_ms += r.times.keyframe_ms;
     ++timed;
+    keyframes_made += r.keyframe.created ? 1 : 0;
+    keyframe_returns += r.keyframe.returned ? 1 : 0;
+    keyframe_measured += r.keyframe.inliers > 0 ? 1 : 0;
     depth_refined += r.depth_points > 0 ? 1 : 0;
     depth_trusted += r.depth_points > 0 && r.depth_trusted ? 1 : 0;
     point_pairs += r.point_pairs;
@@ -113,12 +118,16 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   if (timed_pairs > 0) {
     const double n = timed_pairs;
     const double frame_ms = (total.detect_ms + total.match_ms + total.backproject_ms + total.ransac_ms +
-                             total.covariance_ms) / n;
+                             total.covariance_ms + total.keyframe_ms) / n;
     out << std::fixed << std::setprecision(2) << "  time per frame (decode excluded): " << frame_ms << " ms = "
         << 1000.0 / frame_ms << " frames/s  [detect " << total.detect_ms / n << ", match " << total.match_ms / n
         << ", backproject " << total.backproject_ms / n << ", ransac " << total.ransac_ms / n << ", covariance "
-        << total.covariance_ms / n << " ms]\n";
+        << total.covariance_ms / n << ", keyframe " << total.keyframe_ms / n << " ms]\n";
   }
+  if (tallies.keyframes_made > 0)
+    out << "  keyframes: " << tallies.keyframes_made << " made, " << tallies.keyframe_returns
+        << " returns to a kept one; " << tallies.keyframe_measured << " of " << timed_pairs
+        << " good pairs measured against theirs\n";
   if (tallies.tracked > 0)
     out << std::setprecision(1) << "  sub-pixel tracking: " << tallies.tracked << " of " << tallies.point_pairs
         << " point pairs (" << 100.0 * static_cast<double>(tallies.tracked) / static_cast<double>(tallies.point_pairs)

@@ -3,9 +3,11 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
+#include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
 #include "rgbd_odometry/pipeline/grid_orb.hpp"
@@ -328,6 +330,12 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   }
   mark_cost_stage(CostStage::Keyframe);
   const CostStagesEnd stages_end;
+  const auto start = std::chrono::steady_clock::now();
+  struct Timed {  // the stage's wall time into the pair, on every return
+    PairResult& pair;
+    std::chrono::steady_clock::time_point start;
+    ~Timed() { pair.times.keyframe_ms = ms_since(start); }
+  } timed{pair, start};
   ++frames_;
   const double dt_s = static_cast<double>(pair.t_curr_ns - pair.t_prev_ns) * 1e-9;
   own_motion_ = dt_s > 0 ? motion_from(pair.T_prev_curr, dt_s) : MotionPrior{};

@@ -24,6 +24,8 @@ struct PairTallies {
   int depth_trusted = 0;  // of those, at the learnt trust (PairResult::depth_trusted)
   long point_pairs = 0;   // over the good pairs
   long tracked = 0;       // of those point pairs, tracked below a pixel (PairResult::tracked)
+  int keyframes_made = 0, keyframe_returns = 0;  // PairResult::keyframe
+  int keyframe_measured = 0;                     // good pairs measured against their keyframe
   SensorEstimates sensor;  // as learnt by the last good pair
   void add(const PairResult& r);
 };

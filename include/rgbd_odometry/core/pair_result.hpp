@@ -18,6 +18,7 @@ struct StageTimes {  // wall time of each stage for this pair, milliseconds
   double backproject_ms = 0;  // building the 3-D pairs (incl. the timing-compensation pass)
   double ransac_ms = 0;
   double covariance_ms = 0;
+  double keyframe_ms = 0;     // the frame measured against its keyframe (pipeline/keyframes.hpp)
 };
 
 // The current frame's keyframe (pipeline/keyframes.hpp).
