@@ -99,7 +99,7 @@ Vector6d scatter_variances(const std::vector<Vector6d>& errors) {
 
 TEST(RigidFitCovariance, MatchesTheScatterOfRefitsUnderTheModelsNoise) {
   // Measured: per-axis ratios of the refits' variance to the reported one 1.00-1.12 over 400
-  // draws (a variance's standard error there is 7 %).
+  // draws on x86-64, 0.97-1.10 on armhf (a variance's standard error there is 7 %).
   std::mt19937 rng(7);
   const Scene s = make_scene(200, 8, 6, rng);
   const Refits r = refit(s, 0, 400, rng);
@@ -115,7 +115,8 @@ TEST(RigidFitCovariance, MatchesTheScatterOfRefitsUnderTheModelsNoise) {
 TEST(RigidFitCovariance, ErrorsSharedWithinACellRaiseItToTheirScatter) {
   // One common 2-mm offset per image cell (48 cells), as a depth sensor's regional distortion:
   // the model alone cannot see it, the scatter between cells does. Measured: the refits'
-  // variance 1.9-7.0x the model's on every axis, 1.05-1.39x the cell-robust one's.
+  // variance 2.3-6.5x the model's in translation, 1.5-7.0x in rotation, 0.82-1.39x the
+  // cell-robust one's (x86-64 and armhf: their libraries draw other numbers from one seed).
   std::mt19937 rng(11);
   const Scene s = make_scene(300, 8, 6, rng);
   const Refits r = refit(s, 0.002, 300, rng);
@@ -123,8 +124,8 @@ TEST(RigidFitCovariance, ErrorsSharedWithinACellRaiseItToTheirScatter) {
   for (int i = 0; i < 6; ++i) {
     std::printf("axis %d: refits' variance / the model's %.2f, / the cell-robust one's %.2f\n", i,
                 scatter(i) / r.reported_model(i, i), scatter(i) / r.reported_with_cells(i, i));
-    EXPECT_GT(scatter(i), 1.5 * r.reported_model(i, i)) << "axis " << i;
-    EXPECT_GT(scatter(i), 0.75 * r.reported_with_cells(i, i)) << "axis " << i;
+    EXPECT_GT(scatter(i), (i < 3 ? 2.0 : 1.3) * r.reported_model(i, i)) << "axis " << i;
+    EXPECT_GT(scatter(i), 0.7 * r.reported_with_cells(i, i)) << "axis " << i;
     EXPECT_LT(scatter(i), 1.6 * r.reported_with_cells(i, i)) << "axis " << i;
   }
   // Never below the model in any direction.
