@@ -4,12 +4,14 @@
 //
 // Frame to frame, each pair's error is new and the pose walks: a drone swaying over one view
 // drifts a little every sway, and a still one does too. Here the pose of each frame relative
-// to its keyframe is a small Kalman filter's state: predicted by the frame pair (its motion and
-// covariance, as PairEstimator made them), corrected by matching the frame's features against
-// the keyframe's within the window the prediction sets, the prediction refined over those 3-D
-// pairs (RigidRansac::refine) and weighed by the fit's own covariance. While the view holds,
-// the prediction's covariance grows pair by pair but the keyframe's measurement does not: the
-// pose stays within one measurement of where it was.
+// to its keyframe is predicted by the frame pair (its motion, as PairEstimator made it), then
+// measured against the keyframe: the frame's features matched with the keyframe's within the
+// window the prediction sets, the keyframe's patches tracked into the frame, the prediction
+// refined over those 3-D pairs (RigidRansac::refine), and where the pair stage trusts the depth
+// the two depth maps aligned as well. Where the two agree, the pose moves keyframes.gain of the
+// way to the measurement: the frame pairs keep the short term, the keyframe the long, and over
+// one view the pose stays near where it was. (The gain the covariances would give trusts the
+// keyframe far too much on a Kinect: src/pipeline/README.md#keyframes.)
 //
 // A new keyframe when the inliers against the current one fall below a share of its first
 // frame's; before one is made, the most overlapping of the few kept is tried, so that a return
@@ -19,11 +21,11 @@
 // so that integrating the pairs gives the anchored trajectory. Its covariance stays the frame
 // pair's (see src/pipeline/README.md for what a consumer may assume of consecutive pairs).
 //
-// The keyframe's features, descriptors and image are kept, not recomputed: the measurement
-// costs a windowed match, the sub-pixel tracking of the matched keypoints (the keyframe's
-// patches found in the current image, as the frame pair does: without it a measurement on
-// exact depth errs 2.5 mm where the pair errs 0.7) and one refinement. Nothing is allocated per frame once
-// the kept frames' buffers have been filled.
+// The keyframe's features, descriptors, image and depth cloud are kept, not recomputed: the
+// measurement costs a windowed match, the sub-pixel tracking of the matched keypoints (without
+// it a measurement on exact depth errs 2.5 mm where the pair errs 0.7), one refinement and, on
+// trusted depth, one alignment. The kept frames' buffers are sized at construction: nothing is
+// allocated per frame (for frames of the configured size).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <span>
@@ -80,7 +82,7 @@ class KeyframeTracker {
     int reference_inliers = 0;  // its first measured frame's; 0: none yet
     std::uint64_t id = 0;
     std::uint64_t last_used = 0;
-    FrameTimes times;
+    FrameTimes times;  // its capture times (the depth alignment needs colour and depth together)
   };
   struct Measurement {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  // curr in the keyframe's frame
