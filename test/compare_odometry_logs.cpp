@@ -15,6 +15,7 @@
 // algorithmic divergence (another keypoint, match or RANSAC sample) changes the statuses or
 // the inlier counts, which must be equal, or moves a pose by far more.
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -26,6 +27,15 @@ namespace {
 
 constexpr double kPoseTolerance = 1e-5;          // metres, and quaternion components
 constexpr double kCovarianceRelTolerance = 5e-3;  // relative to the row's largest entry
+constexpr size_t kFields = 69;  // 11 named, the pair's 36 covariance entries, chain, the pose's 21
+constexpr int kChain = 47;
+
+// The largest magnitude among fields [first, last) of a row (NaN fields skipped).
+double largest(const std::vector<std::string>& row, int first, int last) {
+  double m = 0;
+  for (int f = first; f < last; ++f) m = std::max(m, std::abs(std::stod(row[static_cast<size_t>(f)])));
+  return m;
+}
 
 std::vector<std::vector<std::string>> read_csv(const char* path) {
   std::ifstream in(path);
@@ -35,7 +45,7 @@ std::vector<std::vector<std::string>> read_csv(const char* path) {
     std::vector<std::string> fields;
     std::stringstream ss(line);
     for (std::string f; std::getline(ss, f, ',');) fields.push_back(f);
-    if (fields.size() != 47) throw std::runtime_error(std::string(path) + ": a row without 47 fields");
+    if (fields.size() != kFields) throw std::runtime_error(std::string(path) + ": a row without 69 fields");
     rows.push_back(fields);
   }
   if (rows.empty()) throw std::runtime_error(std::string(path) + ": empty");
@@ -58,14 +68,15 @@ int main(int argc, char** argv) {
     double worst_pose = 0, worst_cov = 0;
     int bad = 0;
     for (size_t r = 1; r < a.size(); ++r) {
-      for (int f = 0; f < 4; ++f)
+      for (int f : {0, 1, 2, 3, kChain})
         if (a[r][f] != b[r][f]) {
           std::cerr << "row " << r << " field " << f << ": '" << a[r][f] << "' vs '" << b[r][f] << "'\n";
           ++bad;
         }
-      double row_max = 0;
-      for (int f = 11; f < 47; ++f) row_max = std::max(row_max, std::abs(std::stod(a[r][f])));
-      for (int f = 4; f < 47; ++f) {
+      // The pair's covariance relative to its largest entry, the chain's pose covariance to its own.
+      const double pair_max = largest(a[r], 11, kChain), pose_max = largest(a[r], kChain + 1, static_cast<int>(kFields));
+      for (int f = 4; f < static_cast<int>(kFields); ++f) {
+        if (f == kChain) continue;
         const double x = std::stod(a[r][f]), y = std::stod(b[r][f]);
         if (std::isnan(x) && std::isnan(y)) continue;
         const double d = std::abs(x - y);
@@ -73,6 +84,7 @@ int main(int argc, char** argv) {
           worst_pose = std::max(worst_pose, d);
           if (!(d <= kPoseTolerance)) ++bad;
         } else {
+          const double row_max = f < kChain ? pair_max : pose_max;
           const double rel = row_max > 0 ? d / row_max : d;
           worst_cov = std::max(worst_cov, rel);
           if (!(rel <= kCovarianceRelTolerance)) ++bad;

@@ -304,6 +304,25 @@ TEST(MavlinkOdometryCovariance, GrowsMonotonically) {
   }
 }
 
+Matrix6d sample_covariance(const std::vector<Vector6d>& xs) {
+  Vector6d mean = Vector6d::Zero();
+  for (const auto& x : xs) mean += x;
+  mean /= static_cast<double>(xs.size());
+  Matrix6d C = Matrix6d::Zero();
+  for (const auto& x : xs) C += (x - mean) * (x - mean).transpose();
+  return C / static_cast<double>(xs.size() - 1);
+}
+
+// Variances within 5 % (the sampling error of 20000 draws is ~1 %), correlations within 0.03.
+void expect_covariance_matches(const Matrix6d& analytic, const Matrix6d& sampled, const char* name) {
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(analytic(i, i) / sampled(i, i), 1.0, 0.05) << name << " axis " << i;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < i; ++j)
+      EXPECT_NEAR(analytic(i, j) / std::sqrt(analytic(i, i) * analytic(j, j)),
+                  sampled(i, j) / std::sqrt(sampled(i, i) * sampled(j, j)), 0.03)
+          << name << " (" << i << ", " << j << ")";
+}
+
 // Chains the camera motions through the builder, then draws each motion from its
 // distribution and chains the draws, many times; the builder's covariance must match the
 // spread of the draws about the nominal pose, in both parameterisations.
@@ -339,24 +358,8 @@ void expect_propagation_matches_monte_carlo(const CameraExtrinsic& X, const std:
     const Eigen::Vector3d e = euler_zyx(T.linear());
     euler[n] << dp, wrap_pi(e.x() - e_nominal.x()), wrap_pi(e.y() - e_nominal.y()), wrap_pi(e.z() - e_nominal.z());
   }
-  const auto sample_covariance = [](const std::vector<Vector6d>& xs) {
-    Vector6d mean = Vector6d::Zero();
-    for (const auto& x : xs) mean += x;
-    mean /= static_cast<double>(xs.size());
-    Matrix6d C = Matrix6d::Zero();
-    for (const auto& x : xs) C += (x - mean) * (x - mean).transpose();
-    return Matrix6d(C / static_cast<double>(xs.size() - 1));
-  };
-  // Variances within 5 % (the sampling error of 20000 draws is ~1 %), correlations within 0.03.
-  for (const auto& [analytic, sampled, name] : {std::tuple{P, sample_covariance(left), "left (dp, dth)"},
-                                                std::tuple{P_wire, sample_covariance(euler), "MAVLink (p, rpy)"}}) {
-    for (int i = 0; i < 6; ++i) EXPECT_NEAR(analytic(i, i) / sampled(i, i), 1.0, 0.05) << name << " axis " << i;
-    for (int i = 0; i < 6; ++i)
-      for (int j = 0; j < i; ++j)
-        EXPECT_NEAR(analytic(i, j) / std::sqrt(analytic(i, i) * analytic(j, j)),
-                    sampled(i, j) / std::sqrt(sampled(i, i) * sampled(j, j)), 0.03)
-            << name << " (" << i << ", " << j << ")";
-  }
+  expect_covariance_matches(P, sample_covariance(left), "left (dp, dth)");
+  expect_covariance_matches(P_wire, sample_covariance(euler), "MAVLink (p, rpy)");
 }
 
 TEST(MavlinkOdometryCovariance, AgreesWithMonteCarloOverSeveralSteps) {
@@ -387,6 +390,94 @@ TEST(MavlinkOdometryCovariance, AgreesWithMonteCarloUnderFastTurns) {
     covariances.push_back(Matrix6d(anisotropic.cwiseProduct(anisotropic).asDiagonal()));
   }
   expect_propagation_matches_monte_carlo(tilted_camera_with_lever_arm(), means, covariances, 77);
+}
+
+PairResult chain_pair(std::int64_t index, const Eigen::Isometry3d& T_prev_curr, const Matrix6d& covariance,
+                      bool chain_started, const Matrix6d& chain_covariance) {
+  PairResult p = pair(index, T_prev_curr, covariance);
+  p.keyframe.id = 1;
+  p.keyframe.chain_started = chain_started;
+  p.keyframe.pose_covariance = chain_covariance;
+  return p;
+}
+
+TEST(MavlinkOdometryCovariance, WithKeyframesItIsTheChainsAndHoldsOverOneView) {
+  // GIVEN a hover: 60 still pairs, each uncertain, while the keyframes hold the pose to the
+  // chain's first frame within a fixed covariance
+  const Matrix6d pair_cov = correlated_covariance(0.003, 0.002, 5);
+  const Matrix6d chain_cov = correlated_covariance(0.002, 0.001, 6);
+  OdometryMessageBuilder with, without;
+  const Eigen::Isometry3d still = Eigen::Isometry3d::Identity();
+  for (int k = 0; k < 60; ++k) {
+    with.add(chain_pair(k, still, pair_cov, k == 0, k == 0 ? Matrix6d::Zero() : chain_cov));
+    without.add(pair(k, still, pair_cov));
+  }
+  // THEN the chain's P is the first pair's plus the chain's, and holds; integrated, it grows
+  const Matrix6d first = [&] {
+    OdometryMessageBuilder one;
+    one.add(pair(0, still, pair_cov));
+    return one.pose_covariance();
+  }();
+  const Matrix6d chain_in_body = [&] {
+    OdometryMessageBuilder one;  // the same covariance integrated once from the origin
+    one.add(pair(0, still, chain_cov));
+    return one.pose_covariance();
+  }();
+  EXPECT_TRUE(with.pose_covariance().isApprox(first + chain_in_body, 1e-9));
+  const double integrated = without.pose_covariance().topLeftCorner<3, 3>().trace();
+  const double first_trace = first.topLeftCorner<3, 3>().trace();
+  EXPECT_GT(integrated, 50 * first_trace);
+}
+
+TEST(MavlinkOdometryCovariance, TheChainsAgreesWithMonteCarlo) {
+  // GIVEN a tilted camera with a lever arm, three integrated motions, then a chain that begins
+  // with a fourth and has moved and turned since, with its own covariance of that
+  const CameraExtrinsic X = tilted_camera_with_lever_arm();
+  const Eigen::Isometry3d T_bc = to_isometry(X);
+  MavlinkOdometryConfig config;
+  config.extrinsic = X;
+  OdometryMessageBuilder builder(config);
+  std::vector<Vector6d> means;
+  std::vector<Matrix6d> covariances;
+  for (int k = 0; k < 4; ++k) {
+    Vector6d xi;
+    xi << 0.02, -0.01 * k, 0.06, 0.05, 0.1 - 0.05 * k, 0.03;
+    means.push_back(xi);
+    covariances.push_back(correlated_covariance(0.004, 0.003, 21 + static_cast<unsigned>(k)));
+    builder.add(k < 3 ? pair(k, transform_from_xi(xi), covariances.back())
+                      : chain_pair(k, transform_from_xi(xi), covariances.back(), true, Matrix6d::Zero()));
+  }
+  Vector6d since_xi;
+  since_xi << 0.3, -0.05, 0.4, 0.1, 0.5, -0.2;
+  const Eigen::Isometry3d since = transform_from_xi(since_xi);  // the camera's motion since the chain began
+  const Matrix6d since_cov = correlated_covariance(0.01, 0.008, 31);
+  // Two pairs make up that motion; the second carries the chain's covariance of the whole.
+  const Eigen::Isometry3d half = transform_from_xi(0.5 * since_xi);
+  builder.add(chain_pair(4, half, covariances[0], false, covariances[0]));
+  builder.add(chain_pair(5, half.inverse() * since, covariances[0], false, since_cov));
+  const Matrix6d P = builder.pose_covariance();
+  const Eigen::Isometry3d T_nominal = builder.pose();
+
+  // THEN P is the spread of: the four motions drawn, then the chain's motion drawn as a right
+  // perturbation of the camera's pose since its origin
+  Rng rng(99);
+  std::vector<Matrix6d> L;
+  for (const auto& C : covariances) L.push_back(Eigen::LLT<Matrix6d>(C).matrixL());
+  const Matrix6d L_since = Eigen::LLT<Matrix6d>(since_cov).matrixL();
+  const auto draw = [&rng] {
+    Vector6d z;
+    for (int i = 0; i < 6; ++i) z(i) = rng.gaussian();
+    return z;
+  };
+  std::vector<Vector6d> left(20000);
+  for (Vector6d& out : left) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    for (std::size_t k = 0; k < means.size(); ++k)
+      T = T * (T_bc * transform_from_xi(means[k] + L[k] * draw()) * T_bc.inverse());
+    T = T * (T_bc * since * transform_from_xi(L_since * draw()) * T_bc.inverse());
+    out << T.translation() - T_nominal.translation(), rotation_vector(T.linear() * T_nominal.linear().transpose());
+  }
+  expect_covariance_matches(P, sample_covariance(left), "chain, left (dp, dth)");
 }
 
 // ---- failures, resets, quality ------------------------------------------------------------

@@ -19,13 +19,17 @@ std::vector<std::string> split(const std::string& s) {
 
 TEST(OdometryCsv, HeaderIsTheDocumentedOne) {
   const auto h = split(OdometryCsvWriter::header());
-  ASSERT_EQ(h.size(), 11u + 36u);
+  ASSERT_EQ(h.size(), 11u + 36u + 1u + 21u);
   EXPECT_EQ(h[0], "t_prev");
   EXPECT_EQ(h[10], "qw");
   EXPECT_EQ(h[11], "c00");
   EXPECT_EQ(h[12], "c01");
   EXPECT_EQ(h[17], "c10");
   EXPECT_EQ(h[46], "c55");
+  EXPECT_EQ(h[47], "chain");
+  EXPECT_EQ(h[48], "pc00");
+  EXPECT_EQ(h[54], "pc11");
+  EXPECT_EQ(h[68], "pc55");
 }
 
 TEST(OdometryCsv, OkRowCarriesPoseAndRowMajorCovariance) {
@@ -37,7 +41,7 @@ TEST(OdometryCsv, OkRowCarriesPoseAndRowMajorCovariance) {
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) r.covariance(i, j) = i * 10 + j;
   const auto f = split(OdometryCsvWriter::row(r));
-  ASSERT_EQ(f.size(), 47u);
+  ASSERT_EQ(f.size(), 69u);
   EXPECT_EQ(f[0], "1305031102.175304");
   EXPECT_EQ(f[1], "1305031102.211214");
   EXPECT_EQ(f[2], "ok");
@@ -46,6 +50,25 @@ TEST(OdometryCsv, OkRowCarriesPoseAndRowMajorCovariance) {
   EXPECT_NEAR(std::stod(f[8]), -std::sin(0.05), 1e-9);  // qy
   EXPECT_GT(std::stod(f[10]), 0);                        // qw >= 0 convention
   EXPECT_DOUBLE_EQ(std::stod(f[11 + 6 * 2 + 3]), 23);    // c23
+  EXPECT_EQ(f[47], "0");                                 // no keyframe chain
+  EXPECT_EQ(f[48], "nan");
+}
+
+TEST(OdometryCsv, AKeyframeChainCarriesTheUpperTriangleOfItsPoseCovariance) {
+  PairResult r;
+  r.t_prev_ns = 1'000'000'000;
+  r.t_curr_ns = 1'033'333'333;
+  r.keyframe.id = 4;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) r.keyframe.pose_covariance(i, j) = i * 10 + j;
+  auto f = split(OdometryCsvWriter::row(r));
+  EXPECT_EQ(f[47], "2");                               // going on
+  EXPECT_DOUBLE_EQ(std::stod(f[48 + 1]), 1);           // pc01
+  EXPECT_DOUBLE_EQ(std::stod(f[48 + 6 + 1]), 12);      // pc12: after row 0's six
+  EXPECT_DOUBLE_EQ(std::stod(f[68]), 55);              // pc55
+  r.keyframe.chain_started = true;
+  f = split(OdometryCsvWriter::row(r));
+  EXPECT_EQ(f[47], "1");
 }
 
 TEST(OdometryCsv, FailedRowIsIdentityWithNanCovariance) {
@@ -58,7 +81,8 @@ TEST(OdometryCsv, FailedRowIsIdentityWithNanCovariance) {
   EXPECT_EQ(f[3], "0");
   EXPECT_EQ(f[4], "0");
   EXPECT_EQ(f[10], "1");
-  for (size_t k = 11; k < f.size(); ++k) EXPECT_EQ(f[k], "nan");
+  ASSERT_EQ(f.size(), 69u);
+  for (size_t k = 11; k < f.size(); ++k) EXPECT_EQ(f[k], k == 47 ? "0" : "nan") << "field " << k;
 }
 
 TEST(OdometryCsv, UnwritablePathIsNamed) {

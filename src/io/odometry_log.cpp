@@ -12,6 +12,9 @@ std::string OdometryCsvWriter::header() {
   std::string h = "t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw";
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) h += ",c" + std::to_string(i) + std::to_string(j);
+  h += ",chain";
+  for (int i = 0; i < 6; ++i)
+    for (int j = i; j < 6; ++j) h += ",pc" + std::to_string(i) + std::to_string(j);
   return h;
 }
 
@@ -32,6 +35,17 @@ std::string OdometryCsvWriter::row(const PairResult& r) {
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) {
       if (ok) std::snprintf(buf, sizeof buf, ",%.6e", r.covariance(i, j));
+      else std::snprintf(buf, sizeof buf, ",nan");
+      s += buf;
+    }
+  // The keyframe chain (pipeline/keyframes.hpp): 0 none, 1 begun at this frame, 2 going on;
+  // then the upper triangle of the pose's covariance since it began.
+  const int chain = !ok || r.keyframe.id == 0 ? 0 : r.keyframe.chain_started ? 1 : 2;
+  std::snprintf(buf, sizeof buf, ",%d", chain);
+  s += buf;
+  for (int i = 0; i < 6; ++i)
+    for (int j = i; j < 6; ++j) {
+      if (chain > 0) std::snprintf(buf, sizeof buf, ",%.6e", r.keyframe.pose_covariance(i, j));
       else std::snprintf(buf, sizeof buf, ",nan");
       s += buf;
     }

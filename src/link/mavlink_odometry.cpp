@@ -101,6 +101,7 @@ void OdometryMessageBuilder::add(const PairResult& pair) {
     pending_reset_ = false;
   }
   integrate(last_motion_);
+  if (pair.keyframe.id != 0) anchor_to_chain(pair.keyframe);
   has_pose_ = true;
   compose_delta(last_motion_);
   tracking_ = Tracking::Ok;
@@ -140,6 +141,26 @@ void OdometryMessageBuilder::integrate(const BodyMotion& m) {
   B.bottomRightCorner<3, 3>() = T_local_body_.linear() * so3_right_jacobian(rotation_vector(m.T_prev_curr.linear()));
   P_ = A * P_ * A.transpose() + B * m.covariance * B.transpose();
   P_ = 0.5 * (P_ + P_.transpose());  // keep rounding from making it asymmetric over a long run
+}
+
+void OdometryMessageBuilder::anchor_to_chain(const KeyframeLink& link) {
+  if (link.chain_started || !chain_.has_value()) {
+    chain_ = ChainOrigin{T_local_body_.translation(), P_};
+    return;
+  }
+  if (!link.pose_covariance.allFinite()) return;  // keep the integrated P rather than nonsense
+  // The pose is the chain's origin times the motion since: an error of the origin swings the
+  // whole way from there (A, as in integrate()), and the keyframes' covariance of the motion
+  // since, a right perturbation in the camera frame, turns into the body frame (Ad of the
+  // extrinsic) and then into left perturbations (dp, dth) = (R rho, R phi).
+  Matrix6d A = Matrix6d::Identity();
+  A.topRightCorner<3, 3>() = -skew(T_local_body_.translation() - chain_->position);
+  Matrix6d B = Matrix6d::Zero();
+  B.topLeftCorner<3, 3>() = T_local_body_.linear();
+  B.bottomRightCorner<3, 3>() = T_local_body_.linear();
+  const Matrix6d to_body = se3_adjoint(body_from_camera(config_.extrinsic));
+  P_ = A * chain_->P * A.transpose() + B * to_body * link.pose_covariance * to_body.transpose() * B.transpose();
+  P_ = 0.5 * (P_ + P_.transpose());
 }
 
 std::int8_t OdometryMessageBuilder::quality(const BodyMotion& m) const {

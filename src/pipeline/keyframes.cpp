@@ -351,7 +351,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   if (active_ < 0) {
     pose_ = orthonormalised(pose_ * pair.T_prev_curr);
     make_keyframe(curr);
-    pair.keyframe = {kept_[static_cast<size_t>(active_)].id, 0, true, false};
+    pair.keyframe = {kept_[static_cast<size_t>(active_)].id, 0, true, false, true, Matrix6d::Zero()};
     return;
   }
   Keyframe& kf = kept_[static_cast<size_t>(active_)];
@@ -373,7 +373,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   pose_ = orthonormalised(kf.pose * T_kf_curr_);
   kf.last_used = frames_;
   if (measured && kf.reference_inliers == 0) kf.reference_inliers = z.inliers;
-  pair.keyframe = {kf.id, measured ? z.inliers : 0, false, false};
+  pair.keyframe = {kf.id, measured ? z.inliers : 0, false, false, false, Matrix6d::Zero()};
 
   if (!measured || !holds(kf, z.inliers)) {
     // The view has moved on: back to an earlier keyframe that sees it, or a new one.
@@ -401,6 +401,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
     }
   }
   pair.T_prev_curr = orthonormalised(pose_prev.inverse() * pose_);
+  pair.keyframe.pose_covariance = pose_covariance();
 }
 
 }  // namespace rgbdo

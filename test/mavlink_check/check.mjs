@@ -210,7 +210,13 @@ function readLog(path) {
     const num = (n) => Number(f[col[n]].trim());  // Number('nan') is NaN, as wanted
     const cov = [];
     for (let i = 0; i < 6; i++) for (let j = 0; j < 6; j++) cov.push(num(`c${i}${j}`));
+    // The keyframe chain (0 none, 1 begun here, 2 going on) and the pose's covariance since it
+    // began (upper triangle, camera frame, right perturbation); logs without them: none.
+    const chain = 'chain' in col ? num('chain') : 0;
+    const chainCov = new Array(36).fill(NaN);
+    if (chain > 0) for (let i = 0; i < 6; i++) for (let j = i; j < 6; j++) chainCov[i * 6 + j] = chainCov[j * 6 + i] = num(`pc${i}${j}`);
     return {
+      chain, chainCov,
       line: r + 2,
       tPrevStr: f[col.t_prev].trim(), tCurrStr: f[col.t_curr].trim(),
       status: f[col.status].trim(),
@@ -375,6 +381,7 @@ function main() {
   }
   let p = [0, 0, 0];              // position of body in local frame
   let P = new Array(36).fill(0);  // covariance of (position, orientation), left/local perturbations
+  let chainOrigin = null;          // where the keyframe chain began: { p, P }
   let pathLen = 0;
   let resetBase = null;
   let resets = 0;
@@ -470,6 +477,16 @@ function main() {
       P = add(mul6(mul6(A, P), tr6(A)), mul6(mul6(B, Sb), tr6(B)));
       R = Rnew;
       p = add(p, dp);
+      // With keyframes the pose's covariance is the chain's: P where it began, carried over the
+      // way since (as A above), plus its covariance since then turned into the body frame (the
+      // extrinsic's adjoint) and into left perturbations (R rho, R phi).
+      if (row.chain === 1 || (row.chain === 2 && !chainOrigin)) chainOrigin = { p: p.slice(), P: P.slice() };
+      else if (row.chain === 2 && row.chainCov.every(Number.isFinite)) {
+        const Ao = blocks(I3, scale(skew(sub(p, chainOrigin.p)), -1), Z3, I3);
+        const Ad = blocks(Rbc, mul3(skew(pbc), Rbc), Z3, Rbc);
+        const Bc = mul6(blocks(R, Z3, Z3, R), Ad);
+        P = add(mul6(mul6(Ao, chainOrigin.P), tr6(Ao)), mul6(mul6(Bc, row.chainCov), tr6(Bc)));
+      }
       pathLen += norm(tb);
       okRows.push({ k, row, Rb, tbPrev: tb, dtUs: tCurr.us - tPrev.us, tCurrUs: tCurr.us });
     } else {

@@ -27,6 +27,13 @@ struct KeyframeLink {
   int inliers = 0;       // the frame's inliers against it; 0: not measured (a new keyframe, or none held)
   bool created = false;  // the frame became a new keyframe
   bool returned = false; // the frame re-attached to an earlier keyframe
+  // The chain of keyframes began at this frame: the first good pair, or the first after a
+  // failed one (an unknown motion ends a chain).
+  bool chain_started = false;
+  // The covariance of the right perturbation of this frame's pose relative to the frame the
+  // chain began at (camera frame, xi = (t, rotvec)): what the keyframes leave of the error
+  // since then. Over one view it stays put where integrated pairs would grow frame by frame.
+  Matrix6d pose_covariance = Matrix6d::Zero();
 };
 
 struct PairResult {

@@ -22,6 +22,10 @@
 //   B = [[R_{k-1}, 0], [0, R_k Jr(r_b)]]. It is then expressed in MAVLink's parameters
 //   (x, y, z, roll, pitch, yaw), ZYX Euler angles R = Rz(yaw) Ry(pitch) Rx(roll), through the
 //   Jacobian of (roll, pitch, yaw) with respect to dth (singular at pitch = +-90 deg).
+//   With keyframes (PairResult::keyframe), P is instead the chain's: P at the frame the chain
+//   began, carried (A over the way since), plus the keyframes' covariance of the motion since
+//   then. Over one view it holds still where integrated pairs would grow with every frame;
+//   it grows at keyframe switches and is integrated as above across a failed pair.
 //   Camera odometry sees no gravity: the local frame is level only if the vehicle was level
 //   at the first frame, or if level_initial_attitude() was given its roll and pitch then
 //   (the autopilot's ATTITUDE): the pose starts at Ry(pitch) Rx(roll) instead of identity.
@@ -132,6 +136,7 @@ class OdometryMessageBuilder {
 
   static bool usable(const PairResult& pair);
   void integrate(const BodyMotion& m);
+  void anchor_to_chain(const KeyframeLink& link);
   std::int8_t quality(const BodyMotion& m) const;
   float confidence(double translation_variance_trace, double dt_s) const;
   void compose_delta(const BodyMotion& m);
@@ -139,6 +144,12 @@ class OdometryMessageBuilder {
   MavlinkOdometryConfig config_;
   Eigen::Isometry3d T_local_body_ = Eigen::Isometry3d::Identity();
   Matrix6d P_ = Matrix6d::Zero();
+  // Where the keyframes' current chain began (PairResult::keyframe): its position and P then.
+  struct ChainOrigin {
+    Eigen::Vector3d position;
+    Matrix6d P;
+  };
+  std::optional<ChainOrigin> chain_;
   std::uint8_t reset_counter_ = 0;  // uint8 arithmetic: wraps at 256 like the field
   bool pending_reset_ = false;      // failed pairs seen since the last good one
   bool has_pose_ = false;           // a good pair has been integrated

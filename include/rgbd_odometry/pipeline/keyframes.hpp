@@ -19,7 +19,8 @@
 //
 // What goes out: each pair's motion becomes the motion between the two frames' anchored poses,
 // so that integrating the pairs gives the anchored trajectory. Its covariance stays the frame
-// pair's (see src/pipeline/README.md for what a consumer may assume of consecutive pairs).
+// pair's (see src/pipeline/README.md for what a consumer may assume of consecutive pairs); the
+// pose's since the chain began goes out in PairResult::keyframe, for ODOMETRY's pose.
 //
 // The keyframe's features, descriptors, image and depth cloud are kept, not recomputed: the
 // measurement costs a windowed match, the sub-pixel tracking of the matched keypoints (without
