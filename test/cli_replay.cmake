@@ -15,7 +15,7 @@ if(NOT n_rows EQUAL 40)  # header + 39 pairs of the 40 bundled frames
   message(FATAL_ERROR "odometry.csv has ${n_rows} lines, expected 40")
 endif()
 list(GET rows 0 header)
-if(NOT header MATCHES "^t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw,c00,c01,.*,c55$")
+if(NOT header MATCHES "^t_prev,t_curr,status,inliers,tx,ty,tz,qx,qy,qz,qw,c00,c01,.*,c55,chain,pc00,pc01,.*,pc55$")
   message(FATAL_ERROR "bad header: ${header}")
 endif()
 list(GET rows 1 first)
