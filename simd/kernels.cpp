@@ -16,19 +16,19 @@ constexpr KernelSet kSets[] = {
 #if defined(RGBDO_X86_KERNELS)
     {"avx2", nearest_two_hamming_avx2, hamming_rows_popcnt, perturbation_sums_avx2, score_rigid_avx2, fast9_row_avx2,
      fast9_score_scalar, blend_rows_sse41, resample_row_sse41, box5_row_sse41, depth_in_range_row_sse41, disc_moments_sse41,
-     colour_to_gray_row_scalar, depth_to_metres_row_scalar, track_sample8_scalar, track_sums8x8_scalar, associate_avx2},
+     colour_to_gray_row_scalar, depth_to_metres_row_scalar, track_sample8_scalar, track_sums8x8_scalar, associate_avx2, surface_mean5_scalar},
     {"sse42", nearest_two_hamming_popcnt, hamming_rows_popcnt, perturbation_sums_scalar, score_rigid_scalar, fast9_row_scalar,
      fast9_score_scalar, blend_rows_sse41, resample_row_sse41, box5_row_sse41, depth_in_range_row_sse41, disc_moments_sse41,
-     colour_to_gray_row_scalar, depth_to_metres_row_scalar, track_sample8_scalar, track_sums8x8_scalar, associate_scalar},
+     colour_to_gray_row_scalar, depth_to_metres_row_scalar, track_sample8_scalar, track_sums8x8_scalar, associate_scalar, surface_mean5_scalar},
 #endif
 #if defined(RGBDO_NEON_KERNELS)
     {"neon", nearest_two_hamming_neon, hamming_rows_neon, perturbation_sums_neon, score_rigid_neon, fast9_row_neon,
      fast9_score_neon, blend_rows_neon, resample_row_neon, box5_row_neon, depth_in_range_row_neon, disc_moments_neon,
-     colour_to_gray_row_neon, depth_to_metres_row_neon, track_sample8_neon, track_sums8x8_neon, associate_neon},
+     colour_to_gray_row_neon, depth_to_metres_row_neon, track_sample8_neon, track_sums8x8_neon, associate_neon, surface_mean5_neon},
 #endif
     {"scalar", nearest_two_hamming_scalar, hamming_rows_scalar, perturbation_sums_scalar, score_rigid_scalar, fast9_row_scalar,
      fast9_score_scalar, blend_rows_scalar, resample_row_scalar, box5_row_scalar, depth_in_range_row_scalar, disc_moments_scalar,
-     colour_to_gray_row_scalar, depth_to_metres_row_scalar, track_sample8_scalar, track_sums8x8_scalar, associate_scalar},
+     colour_to_gray_row_scalar, depth_to_metres_row_scalar, track_sample8_scalar, track_sums8x8_scalar, associate_scalar, surface_mean5_scalar},
 };
 
 }  // namespace

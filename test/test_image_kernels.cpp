@@ -4,6 +4,7 @@
 // and the references against independent definitions (OpenCV's integral image and inRange).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
@@ -102,6 +103,57 @@ TEST(ImageKernels, Box5RowSumsTheFiveByFiveNeighbourhood) {
       }
     }
   }
+}
+
+TEST(ImageKernels, SurfaceMeanAveragesOneSurfaceAndKeepsTheCentreElsewhere) {
+  // A noisy slanted plane (2-4 m, Kinect-like noise) with holes and a 20 cm step down its
+  // middle column; samples everywhere 2 pixels in from the border.
+  const int width = 64, height = 48;
+  std::vector<float> depth(static_cast<size_t>(width * height));
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  std::uniform_int_distribution<int> hole(0, 40);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const float z = 2.0f + 0.03f * static_cast<float>(u) + (u >= 32 ? 0.2f : 0.0f);
+      depth[static_cast<size_t>(v * width + u)] = hole(rng) == 0 ? 0.0f : z + 1.425e-3f * z * z * noise(rng);
+    }
+  std::vector<std::int32_t> centre;
+  for (int v = 2; v < height - 2; ++v)
+    for (int u = 2; u < width - 2; ++u) centre.push_back(v * width + u);
+  const int n = static_cast<int>(centre.size());
+  const float spread = 0.06f;
+  std::vector<float> want(centre.size() + 1, -1.0f);
+  simd::surface_mean5_scalar(depth.data(), width, centre.data(), n, spread, want.data());
+  EXPECT_EQ(want.back(), -1.0f) << "wrote past n";
+  int averaged = 0, kept = 0;
+  for (size_t k = 0; k < centre.size(); ++k) {
+    const int u0 = centre[k] % width, v0 = centre[k] / width;
+    double sum = 0, lo = 1e9, hi = -1e9;
+    for (int v = v0 - 2; v <= v0 + 2; ++v)
+      for (int u = u0 - 2; u <= u0 + 2; ++u) {
+        const double z = depth[static_cast<size_t>(v * width + u)];
+        sum += z, lo = std::min(lo, z), hi = std::max(hi, z);
+      }
+    const float c = depth[static_cast<size_t>(centre[k])];
+    if (lo > 0 && hi - lo <= spread * c) {
+      ++averaged;
+      ASSERT_NEAR(want[k], sum / 25, 1e-6) << "sample " << k;
+    } else {
+      ++kept;
+      ASSERT_EQ(want[k], c) << "sample " << k << ": a hole or the step in its window";
+    }
+  }
+  EXPECT_GT(averaged, n / 3);
+  EXPECT_GT(kept, n / 10);
+  for (const auto* set : sets_with_own(&simd::KernelSet::surface_mean5))
+    for (int count : {0, 1, 3, 4, 5, n}) {
+      std::vector<float> got(static_cast<size_t>(count) + 1, -1.0f);
+      set->surface_mean5(depth.data(), width, centre.data(), count, spread, got.data());
+      for (int k = 0; k < count; ++k)
+        ASSERT_EQ(got[static_cast<size_t>(k)], want[static_cast<size_t>(k)]) << set->name << " sample " << k;  // bit-exact
+      EXPECT_EQ(got.back(), -1.0f) << set->name << " wrote past n";
+    }
 }
 
 TEST(ImageKernels, DepthInRangeFollowsInRangeOnEveryFloat) {

@@ -88,6 +88,33 @@ RGBDO_BOX5_ROW(box5_row_neon) {
   box5_row_scalar(centre + i, stride, n - i, out + i);
 }
 
+RGBDO_SURFACE_MEAN5(surface_mean5_neon) {
+  // Per row two overlapping loads: columns 0-3 and 1-4. The first is summed lane by lane, the
+  // second's last lane is column 4's sum: the reference's order, so the sum is bit-exact.
+  // Minimum and maximum take both loads (an overlap changes neither).
+  for (int k = 0; k < n; ++k) {
+    const float* c = depth + centre[k];
+    float32x4_t lanes = vdupq_n_f32(0), column4 = vdupq_n_f32(0);
+    float32x4_t lo = vdupq_n_f32(c[0]), hi = lo;
+    for (std::ptrdiff_t dv = -2; dv <= 2; ++dv) {
+      const float* row = c + dv * stride - 2;
+      const float32x4_t a = vld1q_f32(row), b = vld1q_f32(row + 1);
+      lanes = vaddq_f32(lanes, a);
+      column4 = vaddq_f32(column4, b);
+      lo = vminq_f32(lo, vminq_f32(a, b));
+      hi = vmaxq_f32(hi, vmaxq_f32(a, b));
+    }
+    const float32x2_t pairs = vpadd_f32(vget_low_f32(lanes), vget_high_f32(lanes));  // (c0 + c1, c2 + c3)
+    const float sum = (vget_lane_f32(pairs, 0) + vget_lane_f32(pairs, 1)) + vgetq_lane_f32(column4, 3);
+    float32x2_t lo2 = vpmin_f32(vget_low_f32(lo), vget_high_f32(lo));
+    lo2 = vpmin_f32(lo2, lo2);
+    float32x2_t hi2 = vpmax_f32(vget_low_f32(hi), vget_high_f32(hi));
+    hi2 = vpmax_f32(hi2, hi2);
+    const float low = vget_lane_f32(lo2, 0), high = vget_lane_f32(hi2, 0);
+    mean[k] = low > 0 && high - low <= spread * c[0] ? sum * kSurfaceMeanScale : c[0];
+  }
+}
+
 RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_neon) {
   const std::int32_t lo_key = float_key(lo), hi_key = float_key(hi);
   const int32x4_t lov = vdupq_n_s32(lo_key), hiv = vdupq_n_s32(hi_key);

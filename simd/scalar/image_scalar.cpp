@@ -1,4 +1,5 @@
 // Reference image kernels (rgbd_odometry/simd/image.hpp): the plain loops of their definitions.
+#include <algorithm>
 #include <cstring>
 
 #include "rgbd_odometry/simd/image.hpp"
@@ -24,6 +25,22 @@ RGBDO_BOX5_ROW(box5_row_scalar) {
     for (int dy = -2; dy <= 2; ++dy)
       for (int dx = -2; dx <= 2; ++dx) sum += centre[i + dy * stride + dx];
     out[i] = static_cast<std::uint16_t>(sum);
+  }
+}
+
+RGBDO_SURFACE_MEAN5(surface_mean5_scalar) {
+  for (int k = 0; k < n; ++k) {
+    const float* c = depth + centre[k];
+    float lane[4] = {0, 0, 0, 0}, column4 = 0;
+    float lo = c[0], hi = c[0];
+    for (std::ptrdiff_t dv = -2; dv <= 2; ++dv) {
+      const float* row = c + dv * stride - 2;
+      for (int i = 0; i < 4; ++i) lane[i] += row[i];
+      column4 += row[4];
+      for (int i = 0; i < 5; ++i) lo = std::min(lo, row[i]), hi = std::max(hi, row[i]);
+    }
+    const float sum = ((lane[0] + lane[1]) + (lane[2] + lane[3])) + column4;
+    mean[k] = lo > 0 && hi - lo <= spread * c[0] ? sum * kSurfaceMeanScale : c[0];
   }
 }
 

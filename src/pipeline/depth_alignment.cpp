@@ -8,6 +8,8 @@
 #include <span>
 #include <opencv2/calib3d.hpp>
 
+#include "rgbd_odometry/simd/kernels.hpp"
+
 namespace rgbdo {
 namespace {
 
@@ -38,6 +40,7 @@ void DepthCloud::clear() {
   cols = rows = 0;
   point.clear();
   normal.clear();
+  raw_depth.clear();
 }
 
 DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConfig& depth,
@@ -45,6 +48,8 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
     : stride_(refinement.stride_px),
       cols_(camera.width / refinement.stride_px),
       rows_(camera.height / refinement.stride_px),
+      width_(camera.width),
+      height_(camera.height),
       depth_(depth) {
   // The grid is laid on the undistorted (pinhole) image, so that the alignment projects without
   // the lens model: sample (i, j) is the ray through the pinhole pixel (i s + s/2, j s + s/2),
@@ -74,6 +79,13 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
   cv::undistortPoints(nearest, rays, K, distortion, cv::noArray(), cv::noArray(),
                       cv::TermCriteria(cv::TermCriteria::COUNT, kLensInversionSteps, 0));
   for (const cv::Point2f& r : rays) ray_.emplace_back(r.x, r.y);
+  if (refinement.average_depth)
+    for (size_t k = 0; k < pixel_.size(); ++k) {
+      const int u = pixel_[k] % camera.width, v = pixel_[k] / camera.width;
+      if (pixel_[k] < 0 || u < 2 || v < 2 || u >= camera.width - 2 || v >= camera.height - 2) continue;
+      averaged_sample_.push_back(static_cast<int>(k));
+      averaged_pixel_.push_back(pixel_[k]);
+    }
 }
 
 void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
@@ -84,11 +96,29 @@ void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
   out.normal.resize(n);
   const int half = stride_ / 2;
   const auto lo = static_cast<float>(depth_.min_m), hi = static_cast<float>(depth_.max_m);
-  CV_Assert(depth_m.isContinuous() && depth_m.cols * depth_m.rows > 0);
+  CV_Assert(depth_m.isContinuous() && depth_m.cols == width_ && depth_m.rows == height_);
   const auto* depth = depth_m.ptr<float>();
+  out.raw_depth.resize(n);
   for (size_t k = 0; k < n; ++k) {
     const float z = pixel_[k] >= 0 ? depth[pixel_[k]] : 0.0f;
-    out.point[k] = (z >= lo && z <= hi) ? Eigen::Vector3f(ray_[k].x() * z, ray_[k].y() * z, z) : Eigen::Vector3f::Zero();
+    const bool valid = z >= lo && z <= hi;
+    out.raw_depth[k] = valid ? z : 0.0f;
+    out.point[k] = valid ? Eigen::Vector3f(ray_[k].x() * z, ray_[k].y() * z, z) : Eigen::Vector3f::Zero();
+  }
+  // With refinement.average_depth, each sample the mean of the 5x5 pixels around it where they
+  // are one surface (no hole, no step beyond the keypoints' edge rule over two pixels): the
+  // aligner reads normals from
+  // neighbouring samples, and one pixel's noise of a Kinect's law (0.9 % at 2.5 m) tilts them
+  // by degrees, enough to hold the alignment millimetres off along the slide a far scene leaves
+  // between sideways translation and rotation (src/pipeline/MEASUREMENTS.md#averaged-samples).
+  out.averaged.resize(averaged_pixel_.size());
+  if (!averaged_pixel_.empty())
+    simd::active_kernels().surface_mean5(depth, width_, averaged_pixel_.data(), static_cast<int>(averaged_pixel_.size()),
+                                         static_cast<float>(2 * depth_.edge_max_relative_step), out.averaged.data());
+  for (size_t a = 0; a < averaged_pixel_.size(); ++a) {
+    const auto k = static_cast<size_t>(averaged_sample_[a]);
+    const float z = out.averaged[a];
+    if (out.raw_depth[k] > 0 && z > 0) out.point[k] = Eigen::Vector3f(ray_[k].x() * z, ray_[k].y() * z, z);
   }
   // Normals from the four grid neighbours; none where a neighbour is missing or the depth
   // steps by more than an occlusion edge would (the keypoints' rule, over one grid step).
@@ -299,19 +329,26 @@ double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthClo
   // Z_prev^4 (n . X_prev / Z_prev)^2. Every 4th association (the last iteration's, residuals at
   // its start, which its step barely moves).
   const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  const bool averaged = !prev.averaged.empty() || !curr.averaged.empty();
   const double rounding2 = 2 * quantum_sigma_m_ * quantum_sigma_m_;
   scaled_.clear();
   for (size_t k = 0; k < term_count_; k += 4) {
     const simd::Association& term = terms_[k];
-    const Eigen::Vector3f& p = curr.point[static_cast<size_t>(term.curr_index)];
-    const Eigen::Vector3f& target = prev.point[static_cast<size_t>(term.prev_index)];
-    const Eigen::Vector3f& n = prev.normal[static_cast<size_t>(term.prev_index)];
+    // Averaged samples are read at their own pixels' depths again: the coefficient is the
+    // sensor's per pixel, as the keypoints read it.
+    const auto ci = static_cast<size_t>(term.curr_index), pi = static_cast<size_t>(term.prev_index);
+    const Eigen::Vector3f p = averaged ? Eigen::Vector3f(curr.point[ci] * (curr.raw_depth[ci] / curr.point[ci].z())) : curr.point[ci];
+    const Eigen::Vector3f target =
+        averaged ? Eigen::Vector3f(prev.point[pi] * (prev.raw_depth[pi] / prev.point[pi].z())) : prev.point[pi];
+    const Eigen::Vector3f& n = prev.normal[pi];
+    const float r = averaged ? n.dot(R * p + t - target) : term.r;
     const float along_curr = n.dot(R * p) / p.z(), along_prev = n.dot(target) / target.z();
     const float z2_curr = p.z() * p.z(), z2_prev = target.z() * target.z();
     const double g = static_cast<double>(z2_curr * z2_curr * along_curr * along_curr +
                                          z2_prev * z2_prev * along_prev * along_prev);
     if (!(g > 0)) continue;
-    scaled_.push_back(static_cast<float>((static_cast<double>(term.r) * term.r - kChi2Median1 * rounding2) / g));
+    scaled_.push_back(static_cast<float>((static_cast<double>(r) * r - kChi2Median1 * rounding2) / g));
   }
   if (scaled_.size() < 16) return -1;
   const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);

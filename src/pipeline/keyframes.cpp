@@ -143,6 +143,8 @@ KeyframeTracker::KeyframeTracker(const PipelineConfig& config)
     if (config.refinement.enabled) {
       kf.cloud.point.reserve(static_cast<size_t>(grid_points));
       kf.cloud.normal.reserve(static_cast<size_t>(grid_points));
+      kf.cloud.raw_depth.reserve(static_cast<size_t>(grid_points));
+      kf.cloud.averaged.reserve(static_cast<size_t>(grid_points));
     }
   }
 }

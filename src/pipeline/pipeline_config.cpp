@@ -55,6 +55,7 @@ void add_pipeline_settings(PipelineConfig& c, SettingsTable& table) {
       {"covariance.scale", "", "multiplies the reported covariance; 1: the noise model as it stands", &c.covariance.scale, 1e-6, 1e6},
       {"refinement.enabled", "", "refine the feature motion by aligning the two depth maps and fuse the two by information", &c.refinement.enabled},
       {"refinement.stride_px", "px", "the depth maps are sampled every this many pixels for the alignment", &c.refinement.stride_px, 2, 64},
+      {"refinement.average_depth", "", "each sample of the depth maps is the mean of the 5x5 pixels around it where they lie on one surface (spanning at most twice depth.edge_max_relative_step); off: its one pixel", &c.refinement.average_depth},
       {"refinement.iterations", "", "Gauss-Newton steps of the depth alignment at most", &c.refinement.iterations, 1, 100},
       {"refinement.max_distance_m", "m", "a depth point further than this from its associated point is not used", &c.refinement.max_distance_m, 1e-4, 10, true},
       {"refinement.min_points", "", "fewer associated depth points and the feature motion stands alone", &c.refinement.min_points, 10, 1000000},

@@ -33,8 +33,10 @@ namespace rgbdo {
 // at them; z = 0 marks no point, a zero normal no normal (a hole or a depth edge nearby).
 struct DepthCloud {
   int cols = 0, rows = 0;
-  std::vector<Eigen::Vector3f> point;
+  std::vector<Eigen::Vector3f> point;   // on the sample's ray at its depth (averaged with refinement.average_depth); zero: none
   std::vector<Eigen::Vector3f> normal;
+  std::vector<float> raw_depth;         // the sample's own pixel, unaveraged (what a keypoint reads)
+  std::vector<float> averaged;          // DepthCloudBuilder's scratch: the averaged samples' means
   void clear();
   bool empty() const { return cols == 0; }
 };
@@ -43,12 +45,17 @@ class DepthCloudBuilder {
  public:
   DepthCloudBuilder(const CameraConfig& camera, const DepthConfig& depth, const RefinementConfig& refinement);
   // Samples depth_m (CV_32FC1, metres, 0 = none) on a grid every stride_px pixels of the
-  // undistorted image; allocates only the first time.
+  // undistorted image, each sample averaged on its surface (refinement.average_depth);
+  // allocates only the first time.
   void build(const cv::Mat& depth_m, DepthCloud& out) const;
 
  private:
-  int stride_, cols_, rows_;
+  int stride_, cols_, rows_, width_, height_;
   DepthConfig depth_;
+  // The samples averaged (refinement.average_depth): their indices, and their pixels, whose 5x5
+  // window lies inside the image.
+  std::vector<int> averaged_sample_;
+  std::vector<std::int32_t> averaged_pixel_;
   std::vector<int> pixel_;            // the sensor pixel each grid sample reads (-1: outside the image)
   std::vector<Eigen::Vector2f> ray_;  // that pixel's undistorted (x/z, y/z)
 };

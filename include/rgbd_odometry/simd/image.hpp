@@ -36,6 +36,17 @@ struct ResampleGroup {
 #define RGBDO_DEPTH_IN_RANGE_ROW(name) \
   void name(const float* depth, int n, float lo, float hi, std::uint8_t* out)
 
+// The depth alignment's samples averaged on their surfaces: for each of n samples, centre[k] the
+// index of its pixel in an image of row stride `stride` floats (the caller keeps 2 pixels of
+// image on every side, and every depth finite), the 5x5 depths around it. Where all 25 are
+// positive and the largest exceeds the smallest by at most spread * the centre's depth, mean[k]
+// is their sum times 1/25, summed in one order every set keeps: four column lanes (the window's
+// columns 0-3) and column 4, each over rows -2..2 in turn, then ((c0 + c1) + (c2 + c3)) + c4.
+// Elsewhere (a hole, an edge) mean[k] is the centre's own depth.
+inline constexpr float kSurfaceMeanScale = 1.0f / 25.0f;
+#define RGBDO_SURFACE_MEAN5(name) \
+  void name(const float* depth, std::ptrdiff_t stride, const std::int32_t* centre, int n, float spread, float* mean)
+
 // Colour to intensity as OpenCV's cvtColor(..., COLOR_BGR2GRAY / COLOR_RGB2GRAY) computes it
 // for 8-bit images (OpenCV 4's fixed point, 15 fraction bits: 0.299 R + 0.587 G + 0.114 B,
 // checked against cvtColor by test_image_kernels), so that
@@ -65,6 +76,7 @@ RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_scalar);
 RGBDO_DISC_MOMENTS(disc_moments_scalar);
 RGBDO_COLOUR_TO_GRAY_ROW(colour_to_gray_row_scalar);  // also the x86 sets' (not the target's hot path)
 RGBDO_DEPTH_TO_METRES_ROW(depth_to_metres_row_scalar);
+RGBDO_SURFACE_MEAN5(surface_mean5_scalar);  // also the x86 sets' (not the target's hot path)
 
 RGBDO_BLEND_ROWS(blend_rows_sse41);  // simd/x86/image_sse41.cpp (the sse42 and avx2 sets)
 RGBDO_RESAMPLE_ROW(resample_row_sse41);
@@ -79,5 +91,6 @@ RGBDO_DEPTH_IN_RANGE_ROW(depth_in_range_row_neon);
 RGBDO_DISC_MOMENTS(disc_moments_neon);
 RGBDO_COLOUR_TO_GRAY_ROW(colour_to_gray_row_neon);
 RGBDO_DEPTH_TO_METRES_ROW(depth_to_metres_row_neon);
+RGBDO_SURFACE_MEAN5(surface_mean5_neon);
 
 }  // namespace rgbdo::simd

@@ -43,6 +43,8 @@ using TrackSample8Fn = void (*)(const std::uint8_t* top_left, std::ptrdiff_t str
 using TrackSums8x8Fn = void (*)(const std::int16_t* sampled, const std::int16_t* templ, const std::int16_t* gx,
                                const std::int16_t* gy, std::int32_t* sums);
 using AssociateFn = int (*)(const AssociateInput& in, Association* out);
+using SurfaceMean5Fn = void (*)(const float* depth, std::ptrdiff_t stride, const std::int32_t* centre, int n, float spread,
+                                float* mean);
 using DiscMomentsFn = void (*)(const std::uint8_t* centre, std::ptrdiff_t stride, std::int32_t* m10, std::int32_t* m01);
 
 struct KernelSet {
@@ -63,6 +65,7 @@ struct KernelSet {
   TrackSample8Fn track_sample8;
   TrackSums8x8Fn track_sums8x8;
   AssociateFn associate;
+  SurfaceMean5Fn surface_mean5;
 };
 
 // Every kernel set compiled into this build, the scalar reference last.
