@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "disc_masks.hpp"
+#include "neon_compare.hpp"
 #include "rgbd_odometry/simd/image.hpp"
 
 namespace rgbdo::simd {
@@ -110,8 +111,12 @@ RGBDO_SURFACE_MEAN5(surface_mean5_neon) {
     lo2 = vpmin_f32(lo2, lo2);
     float32x2_t hi2 = vpmax_f32(vget_low_f32(hi), vget_high_f32(hi));
     hi2 = vpmax_f32(hi2, hi2);
-    const float low = vget_lane_f32(lo2, 0), high = vget_lane_f32(hi2, 0);
-    mean[k] = low > 0 && high - low <= spread * c[0] ? sum * kSurfaceMeanScale : c[0];
+    // The verdict by NEON compares, not VFP's (neon_compare.hpp); depths are 0 or normal floats.
+    const float32x4_t low = vdupq_lane_f32(lo2, 0);
+    const float32x4_t span = vsubq_f32(vdupq_lane_f32(hi2, 0), low);
+    const uint32x4_t one_surface =
+        vandq_u32(neon::greater(low, vdupq_n_f32(0)), neon::greater_equal(vdupq_n_f32(spread * c[0]), span));
+    mean[k] = vgetq_lane_u32(one_surface, 0) != 0 ? sum * kSurfaceMeanScale : c[0];
   }
 }
 

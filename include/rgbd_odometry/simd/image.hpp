@@ -38,7 +38,7 @@ struct ResampleGroup {
 
 // The depth alignment's samples averaged on their surfaces: for each of n samples, centre[k] the
 // index of its pixel in an image of row stride `stride` floats (the caller keeps 2 pixels of
-// image on every side, and every depth finite), the 5x5 depths around it. Where all 25 are
+// image on every side, and every depth 0 or a normal float), the 5x5 depths around it. Where all 25 are
 // positive and the largest exceeds the smallest by at most spread * the centre's depth, mean[k]
 // is their sum times 1/25, summed in one order every set keeps: four column lanes (the window's
 // columns 0-3) and column 4, each over rows -2..2 in turn, then ((c0 + c1) + (c2 + c3)) + c4.
