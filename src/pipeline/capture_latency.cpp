@@ -30,7 +30,7 @@ constexpr double kBiasPriorSigma = 0.2;
 constexpr int kCurvatureSteps = 3;
 // A pair whose residual at the known latency is beyond chi-square(3) 99.9 % is a failed fit's.
 constexpr double kChi2_3_999 = 16.27;
-// ... judged only once the pairs' scatter rests on this many degrees of freedom (12 turning
+// That gate opens only once the pairs' scatter rests on this many degrees of freedom (12 turning
 // pairs): a scatter read from a handful of pairs is too small as often as not, and a gate that
 // narrow left out the very pairs that would move an early estimate off its first guess (on the
 // bundled fr1 frames' 40-frame replay with refinement.average_depth, locked at 8.9 ms, 16.4 with
