@@ -211,15 +211,16 @@ TEST(Keyframes, AStillCameraWithFreshNoiseStaysWhereItWas) {
   EXPECT_GT(without.end.translation().norm(), 4 * with.end.translation().norm());
 }
 
-TEST(Keyframes, TheChainsCovarianceCoversThePoseWhereIntegratedPairsWouldGrow) {
-  // The bundled ICL frames out and back three times, keyframes as shipped. At every frame, the
-  // pose since the chain began (the first pair) against the exact ground truth, its 6-D NEES
-  // under the keyframes' covariance (PairResult::keyframe.pose_covariance, what ODOMETRY's pose
-  // covariance is made of) and under the pairs' covariances integrated over the same way.
-  // Measured: mean NEES 0.22 (chain) and 0.02 (integrated), both wide (6 when consistent);
-  // position sigma at the end 12.7 mm (chain) and 148 mm (integrated), the error 1.4 mm. The
-  // chain's grows at each new keyframe, by what the pull leaves of the pairs' covariance.
-  NoisyIcl icl;
+// The bundled ICL frames out and back three times, keyframes as shipped. At every frame, the
+// pose since the chain began (the first pair) against the exact ground truth, its 6-D NEES
+// under the keyframes' covariance (PairResult::keyframe.pose_covariance, what ODOMETRY's pose
+// covariance is made of) and under the pairs' covariances integrated over the same way.
+struct ChainRun {
+  double nees_chain = 0, nees_integrated = 0;  // means over the frames
+  double median_chain = 0, within_gate = 0;     // the chain's median NEES; its share under chi2(6) 95 %
+  double sigma_chain_mm = 0, sigma_integrated_mm = 0, error_mm = 0;  // position, at the end
+};
+ChainRun run_chain(NoisyIcl& icl) {
   std::vector<size_t> order;
   for (int cycle = 0; cycle < 3; ++cycle) {
     for (size_t i = 0; i + 1 < icl.size(); ++i) order.push_back(i);
@@ -229,39 +230,74 @@ TEST(Keyframes, TheChainsCovarianceCoversThePoseWhereIntegratedPairsWouldGrow) {
   cv::RNG rng(3);
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // since the chain began
   Matrix6d integrated = Matrix6d::Zero();                  // of its right perturbation
-  double nees_chain = 0, nees_integrated = 0, error_mm = 0;
+  ChainRun run;
+  std::vector<double> chain_nees;
   int compared = 0;
   Matrix6d chain_end = Matrix6d::Zero();
-  ASSERT_FALSE(pipeline.process(icl.noisy(order[0], 0, rng)).has_value());  // the first frame: no pair
+  EXPECT_FALSE(pipeline.process(icl.noisy(order[0], 0, rng)).has_value());  // the first frame: no pair
   for (size_t k = 1; k < order.size(); ++k) {
     const auto r = pipeline.process(icl.noisy(order[k], static_cast<int>(k), rng));
-    ASSERT_TRUE(r.has_value());
-    ASSERT_EQ(r->status, Status::Ok) << "frame " << k;
-    ASSERT_EQ(r->keyframe.chain_started, k == 1) << "frame " << k;  // one chain: no pair fails
+    EXPECT_TRUE(r.has_value() && r->status == Status::Ok) << "frame " << k;
+    if (!r || r->status != Status::Ok) return run;
+    EXPECT_EQ(r->keyframe.chain_started, k == 1) << "frame " << k;  // one chain: no pair fails
     if (k == 1) continue;
     pose = pose * r->T_prev_curr;
     const Matrix6d carry = se3_adjoint(r->T_prev_curr.inverse());
     integrated = carry * integrated * carry.transpose() + right_perturbation_covariance(r->T_prev_curr, r->covariance);
     const Eigen::Isometry3d truth = icl.truth(order[1]).inverse() * icl.truth(order[k]);
     const Vector6d e = right_perturbation_between(truth, pose);
-    nees_chain += e.dot(r->keyframe.pose_covariance.ldlt().solve(e));
-    nees_integrated += e.dot(integrated.ldlt().solve(e));
-    error_mm = 1e3 * e.head<3>().norm();
+    chain_nees.push_back(e.dot(r->keyframe.pose_covariance.ldlt().solve(e)));
+    run.nees_chain += chain_nees.back();
+    run.nees_integrated += e.dot(integrated.ldlt().solve(e));
+    run.error_mm = 1e3 * e.head<3>().norm();
     chain_end = r->keyframe.pose_covariance;
     ++compared;
   }
-  nees_chain /= compared;
-  nees_integrated /= compared;
-  const double sigma_chain_mm = 1e3 * std::sqrt(chain_end.topLeftCorner<3, 3>().trace());
-  const double sigma_integrated_mm = 1e3 * std::sqrt(integrated.topLeftCorner<3, 3>().trace());
-  std::printf("pose since the chain began, %d frames: mean NEES %.2f (chain) %.2f (integrated); position sigma at the end "
-              "%.2f mm (chain) %.1f mm (integrated), error %.2f mm\n",
-              compared, nees_chain, nees_integrated, sigma_chain_mm, sigma_integrated_mm, error_mm);
-  EXPECT_GT(nees_chain, 0.15);  // and never over-confident
-  EXPECT_LT(nees_chain, 0.3);
-  EXPECT_GT(nees_chain, 5 * nees_integrated);
-  EXPECT_LT(sigma_chain_mm, 0.12 * sigma_integrated_mm);
-  EXPECT_LT(error_mm, 2.0);
+  run.nees_chain /= compared;
+  run.nees_integrated /= compared;
+  run.within_gate = static_cast<double>(std::count_if(chain_nees.begin(), chain_nees.end(), [](double x) { return x < 12.59; })) /
+                    static_cast<double>(chain_nees.size());
+  std::nth_element(chain_nees.begin(), chain_nees.begin() + chain_nees.size() / 2, chain_nees.end());
+  run.median_chain = chain_nees[chain_nees.size() / 2];
+  run.sigma_chain_mm = 1e3 * std::sqrt(chain_end.topLeftCorner<3, 3>().trace());
+  run.sigma_integrated_mm = 1e3 * std::sqrt(integrated.topLeftCorner<3, 3>().trace());
+  std::printf("pose since the chain began, %d frames: mean NEES %.2f (chain; median %.2f, %.1f %% under the gate) %.2f "
+              "(integrated); position sigma at the end %.2f mm (chain) %.1f mm (integrated), error %.2f mm\n",
+              compared, run.nees_chain, run.median_chain, 100 * run.within_gate, run.nees_integrated, run.sigma_chain_mm,
+              run.sigma_integrated_mm, run.error_mm);
+  return run;
+}
+
+TEST(Keyframes, TheChainsCovarianceCoversThePoseWhereIntegratedPairsWouldGrow) {
+  // Measured: median NEES 0.06 (chain), 99.6 % of the frames under the gate, both covariances
+  // wide (mean 0.26 chain, 0.02 integrated; 6 when consistent); position sigma at the end
+  // 19.3 mm (chain) and 148 mm (integrated), the error 1.4 mm. The chain's grows at each new
+  // keyframe, by what the pull leaves of the pairs' covariance. (The mean is not asserted: the
+  // frames at the sway's turns, where the motion reverses within a frame, reach NEES 30-260,
+  // and how far moves with the last bits of the arithmetic.)
+  NoisyIcl icl;
+  const ChainRun run = run_chain(icl);
+  EXPECT_GT(run.median_chain, 0.04);  // and never over-confident
+  EXPECT_LT(run.median_chain, 0.09);
+  EXPECT_GE(run.within_gate, 0.99);
+  EXPECT_LT(run.sigma_chain_mm, 0.16 * run.sigma_integrated_mm);
+  EXPECT_LT(run.error_mm, 2.0);
+}
+
+TEST(Keyframes, WhereTheKeyframesMeasurementIsPreciseTheChainsCovarianceStillCoversIt) {
+  // The same with refinement.average_depth: the keyframe's measurement, fused with the depth
+  // maps' alignment at the learnt factors, is precise, and its error is mostly the keyframe's
+  // own, the same in every measurement against it. Measured: median NEES 3.31, 94.0 % of the
+  // frames under the gate, position sigma at the end 1.21 mm, the error 1.76 mm; reported with
+  // the covariance of independent errors, (1-g)^2 P + g^2 R, median 10.9 and 59.1 % under the
+  // gate (sigma at the end 0.79 mm).
+  NoisyIcl icl;
+  icl.config().refinement.average_depth = true;
+  const ChainRun run = run_chain(icl);
+  EXPECT_GT(run.median_chain, 2.3);
+  EXPECT_LT(run.median_chain, 5.0);
+  EXPECT_GE(run.within_gate, 0.9);
+  EXPECT_LT(run.error_mm, 2.2);
 }
 
 TEST(Keyframes, BackAtAnEarlierViewThePoseReturnsToIt) {

@@ -149,16 +149,17 @@ KeyframeTracker::KeyframeTracker(const PipelineConfig& config)
   }
 }
 
-bool KeyframeTracker::agree(const Eigen::Isometry3d& T_pred, const Matrix6d& cov_pred, const Measurement& z) const {
+bool KeyframeTracker::agree(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z) const {
   Eigen::Isometry3d fused;
   Matrix6d fused_cov;
-  return fuse_estimates(T_pred, cov_pred, z.T, z.covariance, Matrix6d::Identity(), 6, fused, fused_cov);
+  return fuse_estimates(T_pred, cov_pred.independent, z.T, z.covariance, Matrix6d::Identity(), 6, fused, fused_cov);
 }
 
-void KeyframeTracker::correct(const Eigen::Isometry3d& T_pred, const Matrix6d& cov_pred, const Measurement& z) {
+void KeyframeTracker::correct(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z) {
   const double g = config_.keyframes.gain;
   T_kf_curr_ = orthonormalised(T_pred * transform_from_xi(g * right_perturbation_between(T_pred, z.T)));
-  cov_kf_curr_ = (1 - g) * (1 - g) * cov_pred + g * g * z.covariance;
+  cov_kf_curr_.independent = (1 - g) * (1 - g) * cov_pred.independent + g * g * z.covariance;
+  cov_kf_curr_.bound = (1 - g) * cov_pred.bound + g * z.covariance;
 }
 
 bool KeyframeTracker::holds(const Keyframe& kf, int inliers) const {
@@ -254,10 +255,9 @@ void KeyframeTracker::refine_with_depth(const Keyframe& kf, const ProcessedFrame
   out.covariance = fused_cov;
 }
 
-Matrix6d KeyframeTracker::pose_covariance() const {
-  if (active_ < 0) return Matrix6d::Zero();
-  const Matrix6d carry = se3_adjoint(T_kf_curr_.inverse());
-  return carry * kept_[static_cast<size_t>(active_)].pose_covariance * carry.transpose() + cov_kf_curr_;
+KeyframeTracker::ChainCovariance KeyframeTracker::pose_covariance() const {
+  if (active_ < 0) return {};
+  return kept_[static_cast<size_t>(active_)].pose_covariance.carried(se3_adjoint(T_kf_curr_.inverse())) + cov_kf_curr_;
 }
 
 int KeyframeTracker::most_overlapping(int except) const {
@@ -287,7 +287,7 @@ int KeyframeTracker::most_overlapping(int except) const {
 }
 
 void KeyframeTracker::make_keyframe(const ProcessedFrame& curr) {
-  const Matrix6d pose_cov = pose_covariance();
+  const ChainCovariance pose_cov = pose_covariance();
   // A free slot, or the least recently used keyframe's.
   const auto slot = static_cast<size_t>(
       std::min_element(kept_.begin(), kept_.end(),
@@ -319,7 +319,7 @@ void KeyframeTracker::make_keyframe(const ProcessedFrame& curr) {
   kf.last_used = frames_;
   active_ = static_cast<int>(slot);
   T_kf_curr_ = Eigen::Isometry3d::Identity();
-  cov_kf_curr_.setZero();
+  cov_kf_curr_ = {};
 }
 
 void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
@@ -362,8 +362,8 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   // The frame pair predicts; the keyframe measures.
   const Matrix6d carry = se3_adjoint(pair.T_prev_curr.inverse());
   const Eigen::Isometry3d T_pred = T_kf_prev * pair.T_prev_curr;
-  const Matrix6d cov_pred =
-      carry * cov_kf_curr_ * carry.transpose() + right_perturbation_covariance(pair.T_prev_curr, pair.motion_covariance);
+  const ChainCovariance cov_pred =
+      cov_kf_curr_.carried(carry) + right_perturbation_covariance(pair.T_prev_curr, pair.motion_covariance);
   Measurement z;
   const bool measured = measure(kf, curr, T_pred, z) && agree(T_pred, cov_pred, z);
   if (measured) {
@@ -385,7 +385,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
       Keyframe& old = kept_[static_cast<size_t>(back)];
       const Eigen::Isometry3d T_back = old.pose.inverse() * pose_;
       const Matrix6d carry_back = se3_adjoint(T_back.inverse());
-      const Matrix6d cov_back = carry_back * old.pose_covariance * carry_back.transpose() + pose_covariance();
+      const ChainCovariance cov_back = old.pose_covariance.carried(carry_back) + pose_covariance();
       Measurement zb;
       if (measure(old, curr, T_back, zb) && holds(old, zb.inliers) && agree(T_back, cov_back, zb)) {
         active_ = back;
@@ -403,7 +403,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
     }
   }
   pair.T_prev_curr = orthonormalised(pose_prev.inverse() * pose_);
-  pair.keyframe.pose_covariance = pose_covariance();
+  pair.keyframe.pose_covariance = pose_covariance().bound;
 }
 
 }  // namespace rgbdo
