@@ -30,12 +30,6 @@ constexpr double kBiasPriorSigma = 0.2;
 constexpr int kCurvatureSteps = 3;
 // A pair whose residual at the known latency is beyond chi-square(3) 99.9 % is a failed fit's.
 constexpr double kChi2_3_999 = 16.27;
-// That gate opens only once the pairs' scatter rests on this many degrees of freedom (12 turning
-// pairs): a scatter read from a handful of pairs is too small as often as not, and a gate that
-// narrow left out the very pairs that would move an early estimate off its first guess (on the
-// bundled fr1 frames' 40-frame replay with refinement.average_depth, locked at 8.9 ms, 16.4 with
-// the wait; fr1_xyz's 240 frames read 13.4).
-constexpr double kGateMinDof = 32;
 // A pair turned the camera when its rotation is this many sigma from none.
 constexpr double kTurningChi2 = 9.0;
 // A pair's rotation noise before the residuals show it, rad^2 per axis (0.1 degree), and the
@@ -154,7 +148,7 @@ void CaptureLatencyEstimator::process(const Pair& p) {
     }
     residual[static_cast<std::size_t>(k)] = theta - *swept;
   }
-  if (estimate_.known && 3 * weight_sum_ - 4 >= kGateMinDof) {
+  if (estimate_.known) {
     // A failed fit's rotation says nothing of the latency: judged at the current estimate
     // against the pairs' own scatter about it.
     const double at = (estimate_.latency_s - config_.min_s) / (kStepNs * 1e-9);
