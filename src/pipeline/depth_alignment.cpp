@@ -41,6 +41,7 @@ void DepthCloud::clear() {
   point.clear();
   normal.clear();
   raw_depth.clear();
+  averaged.clear();
 }
 
 DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConfig& depth,
@@ -107,10 +108,10 @@ void DepthCloudBuilder::build(const cv::Mat& depth_m, DepthCloud& out) const {
   }
   // With refinement.average_depth, each sample the mean of the 5x5 pixels around it where they
   // are one surface (no hole, no step beyond the keypoints' edge rule over two pixels): the
-  // aligner reads normals from
-  // neighbouring samples, and one pixel's noise of a Kinect's law (0.9 % at 2.5 m) tilts them
-  // by degrees, enough to hold the alignment millimetres off along the slide a far scene leaves
-  // between sideways translation and rotation (src/pipeline/MEASUREMENTS.md#averaged-samples).
+  // aligner reads normals from neighbouring samples, and one pixel's noise of a Kinect's law
+  // (0.9 % at 2.5 m) tilts them by degrees, enough to hold the alignment millimetres off along
+  // the slide a far scene leaves between sideways translation and rotation
+  // (src/pipeline/MEASUREMENTS.md#averaged-samples).
   out.averaged.resize(averaged_pixel_.size());
   if (!averaged_pixel_.empty())
     simd::active_kernels().surface_mean5(depth, width_, averaged_pixel_.data(), static_cast<int>(averaged_pixel_.size()),
