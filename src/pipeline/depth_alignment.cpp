@@ -33,6 +33,13 @@ constexpr double kStepTranslationM = 1e-5, kStepRotationRad = 1e-5;
 // The lens model's inversion for the grid's rays: converged to 0.001 px by 20 steps over
 // TUM fr1's whole image.
 constexpr int kLensInversionSteps = 50;
+// The shared rounding's depth units hashed into this many buckets: two units 0.8 m apart
+// (at 5000 units/m) sharing one are counted as one (measured: no different from 65536).
+constexpr int kRoundingBuckets = 4096;
+// add_shared_rounding's glance: every this many-th association; below this share of the
+// covariance (whitened trace) the shared rounding is not read in full.
+constexpr int kRoundingGlance = 8;
+constexpr double kRoundingNegligible = 0.2;
 
 }  // namespace
 
@@ -162,7 +169,15 @@ DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& r
       depth_noise_coeff_(depth_noise_coeff),
       quantum_sigma_m_(1.0 / (depth_units_per_m * std::sqrt(12.0))),
       grid_(grid_intrinsics(camera, refinement.stride_px)),
-      associate_(simd::active_kernels().associate) {}
+      associate_(simd::active_kernels().associate),
+      units_per_m_(depth_units_per_m),
+      unit_gradient_prev_(kRoundingBuckets),
+      unit_gradient_curr_(kRoundingBuckets),
+      unit_mark_prev_(kRoundingBuckets, 0u),
+      unit_mark_curr_(kRoundingBuckets, 0u) {
+  touched_prev_.reserve(kRoundingBuckets);
+  touched_curr_.reserve(kRoundingBuckets);
+}
 
 void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed,
                          DepthAlignment& out) {
@@ -203,6 +218,7 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
     if (step.head<3>().norm() < kStepTranslationM && step.tail<3>().norm() < kStepRotationRad) break;
   }
   if (!cluster_covariance(eq, out)) return;
+  add_shared_rounding(prev, curr, eq, out);
   out.T_prev_curr = T;
   out.points = eq.used;
   out.ok = out.constrained > 0 && out.covariance.allFinite();
@@ -240,10 +256,10 @@ void DepthAligner::associate(const DepthCloud& curr, const Eigen::Isometry3d& T,
 DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   const std::span<const simd::Association> terms(terms_.data(), term_count_);
   // Tukey's biweight on the normalised residuals, its scale their median absolute deviation
-  // (over every 4th association: plenty for a median): associations across a crease or an
+  // (over every 8th association: plenty for a median): associations across a crease or an
   // occlusion edge weigh nothing, whatever the sensor's noise.
   scaled_.clear();
-  for (size_t k = 0; k < terms.size(); k += 4) scaled_.push_back(terms[k].r * terms[k].r * terms[k].w);
+  for (size_t k = 0; k < terms.size(); k += 8) scaled_.push_back(terms[k].r * terms[k].r * terms[k].w);
   const auto mid = scaled_.begin() + static_cast<std::ptrdiff_t>(scaled_.size() / 2);
   std::nth_element(scaled_.begin(), mid, scaled_.end());
   const double scale2 = 1.4826 * 1.4826 * static_cast<double>(*mid);
@@ -286,10 +302,17 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   eq.b = b;
   eq.used = used;
   eq.s2 = sum_wr2 / std::max(sum_weight - 6, 1.0);
+  eq.cutoff2 = cutoff2;
+  eq.floor_r2 = floor_r2;
   return eq;
 }
 
-bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out) const {
+float DepthAligner::term_weight(const simd::Association& term, const NormalEquations& eq) {
+  const double u2 = static_cast<double>(term.r) * term.r / std::max(eq.cutoff2 / term.w, eq.floor_r2);
+  return u2 < 1 ? static_cast<float>((1 - u2) * (1 - u2) * term.w) : 0.0f;
+}
+
+bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out) {
   // The covariance at the last linearisation: cells as clusters of correlated residuals.
   Matrix6d spread = Matrix6d::Zero();
   int cells = 0;
@@ -319,22 +342,96 @@ bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment&
   const double n_cells = cells;
   out.covariance = H_inv * spread * H_inv * (n_cells / (n_cells - 1)) + H_inv * (eq.s2 * 6.0 / n_cells);
   out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
+  h_inv_ = H_inv;
   out.basis = basis;
   out.constrained = k;
   return true;
 }
 
+void DepthAligner::add_shared_rounding(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq,
+                                       DepthAlignment& out) {
+  // A glance first, at every kRoundingGlance-th association: where the depth's noise swamps
+  // its rounding (a Kinect's millimetres against 0.2 mm units) the shared part changes the
+  // covariance by less than kRoundingNegligible in any direction and is left at that; where
+  // it does not (exact depth), every association is read.
+  Matrix6d part = h_inv_ * shared_rounding_spread(prev, curr, eq, kRoundingGlance) * h_inv_;
+  const int k = out.constrained;
+  using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+  const Square V = out.basis.leftCols(k);
+  const Eigen::LDLT<Square> base(V.transpose() * out.covariance * V);
+  if (base.info() != Eigen::Success) return;
+  // Its share in the whitened covariance: the trace bounds the largest direction's.
+  const double share = base.solve(V.transpose() * part * V).trace();
+  if (!(share <= kRoundingNegligible)) part = h_inv_ * shared_rounding_spread(prev, curr, eq, 1) * h_inv_;
+  out.covariance += 0.5 * (part + part.transpose());
+}
+
+Matrix6d DepthAligner::shared_rounding_spread(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq,
+                                               int every) {
+  // Every sample read as one depth unit carries one rounding error, however many share it. On
+  // exact depth a wall square to the camera is one unit across thousands of samples (a wall
+  // turned about the vertical, one unit down each column): their residuals all move with it,
+  // so they show nothing of it, and counted as independent it is a thousand times too small.
+  // A depth error e moves a point X by e X / Z, the residual by e n . X / Z (taken at the
+  // target for both frames: the two points lie a pair's motion apart). Each unit's weighted
+  // gradient is summed, for each frame apart; their spread times the rounding's variance is
+  // what the estimate takes from them (src/pipeline/MEASUREMENTS.md#shared-rounding). A unit
+  // read once is left out: the weights already count its rounding as independent noise.
+  unit_generation_ += 2;  // a bucket's mark: this generation once read, + 1 once shared
+  if (unit_generation_ < 2) {  // wrapped: every mark is stale
+    std::fill(unit_mark_prev_.begin(), unit_mark_prev_.end(), 0u);
+    std::fill(unit_mark_curr_.begin(), unit_mark_curr_.end(), 0u);
+    unit_generation_ = 2;
+  }
+  touched_prev_.clear();
+  touched_curr_.clear();
+  const auto units_per_m = static_cast<float>(units_per_m_);
+  const auto add = [&](float depth_m, float scale, const float* j, std::vector<Eigen::Matrix<float, 6, 1>>& sums,
+                       std::vector<std::uint32_t>& marks, std::vector<int>& shared) {
+    const auto b = static_cast<size_t>(static_cast<int>(depth_m * units_per_m + 0.5f) & (kRoundingBuckets - 1));
+    Eigen::Matrix<float, 6, 1>& g = sums[b];
+    if (marks[b] == unit_generation_) {  // its second sample: a shared unit
+      marks[b] = unit_generation_ + 1;
+      shared.push_back(static_cast<int>(b));
+    } else if (marks[b] != unit_generation_ + 1) {  // its first
+      marks[b] = unit_generation_;
+      g.setZero();
+    }
+    for (int e = 0; e < 6; ++e) g(e) += scale * j[e];
+  };
+  for (size_t k = 0; k < term_count_; k += static_cast<size_t>(every)) {
+    const simd::Association& term = terms_[k];
+    const float w = term_weight(term, eq);
+    if (!(w > 0)) continue;
+    const auto pi = static_cast<size_t>(term.prev_index);
+    const Eigen::Vector3f& q = prev.point[pi];
+    const float along = w * prev.normal[pi].dot(q) / q.z();
+    add(curr.raw_depth[static_cast<size_t>(term.curr_index)], along, term.j, unit_gradient_curr_, unit_mark_curr_,
+        touched_curr_);
+    add(prev.raw_depth[pi], -along, term.j, unit_gradient_prev_, unit_mark_prev_, touched_prev_);
+  }
+  // The lower triangle only (rankUpdate): on exact depth thousands of units are shared.
+  Matrix6d spread = Matrix6d::Zero();
+  for (int b : touched_prev_)
+    spread.selfadjointView<Eigen::Lower>().rankUpdate(unit_gradient_prev_[static_cast<size_t>(b)].cast<double>());
+  for (int b : touched_curr_)
+    spread.selfadjointView<Eigen::Lower>().rankUpdate(unit_gradient_curr_[static_cast<size_t>(b)].cast<double>());
+  spread = spread.selfadjointView<Eigen::Lower>();
+  // Read at every `every`-th association: each unit's sum is that share of its whole.
+  return spread * (static_cast<double>(every * every) * quantum_sigma_m_ * quantum_sigma_m_);
+}
+
 double DepthAligner::residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T) {
   // A depth error e (sigma c Z^2) moves a point X by e X / Z, so r = n . (e_curr X_curr / Z_curr
   // - e_prev X_prev / Z_prev): var r = c^2 g + rounding, g = Z_curr^4 (n . X_curr / Z_curr)^2 +
-  // Z_prev^4 (n . X_prev / Z_prev)^2. Every 4th association (the last iteration's, residuals at
+  // Z_prev^4 (n . X_prev / Z_prev)^2. Every 8th association (the last iteration's, residuals at
   // its start, which its step barely moves).
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const bool averaged = !prev.averaged.empty() || !curr.averaged.empty();
   const double rounding2 = 2 * quantum_sigma_m_ * quantum_sigma_m_;
   scaled_.clear();
-  for (size_t k = 0; k < term_count_; k += 4) {
+  for (size_t k = 0; k < term_count_; k += 8) {
     const simd::Association& term = terms_[k];
     // Averaged samples are read at their own pixels' depths again: the coefficient is the
     // sensor's per pixel, as the keypoints read it.

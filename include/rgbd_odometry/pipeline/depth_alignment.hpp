@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <vector>
 
@@ -94,9 +95,6 @@ class DepthAligner {
   double depth_noise_coeff_;
   double quantum_sigma_m_;  // one depth unit's rounding, 1/sqrt(12) of it
   std::array<float, 4> grid_;  // grid_intrinsics()
-  // c from the residuals at T: their median, net of rounding, against each association's
-  // noise geometry (both depths along their rays, seen along the normal).
-  double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
 
   // One Gauss-Newton step's sums at the current associations.
   struct NormalEquations {
@@ -104,12 +102,24 @@ class DepthAligner {
     Vector6d b = Vector6d::Zero();
     double s2 = 0;  // the a-posteriori variance factor
     int used = 0;   // associations with weight
+    double cutoff2 = 0, floor_r2 = 0;  // the robust weights' scale: see term_weight()
   };
+  // An association's weight in those sums (0: none).
+  static float term_weight(const simd::Association& term, const NormalEquations& eq);
   // The steps of align(): the associations at T (terms_, term_cells_; `it` the iteration), the
   // robustly weighted sums over them (and each cell's gradient), the covariance from them.
   void associate(const DepthCloud& curr, const Eigen::Isometry3d& T, int it, simd::AssociateInput& in);
   NormalEquations weighted_normal_equations();
-  bool cluster_covariance(const NormalEquations& eq, DepthAlignment& out) const;
+  // c from the residuals at T: their median, net of rounding, against each association's
+  // noise geometry (both depths along their rays, seen along the normal).
+  double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
+  bool cluster_covariance(const NormalEquations& eq, DepthAlignment& out);
+  // Adds to out.covariance what the rounding errors shared by samples read as one depth unit
+  // do to the estimate; shared_rounding_spread is their spread over every `every`-th of the
+  // last sums' associations (to go between H^-1 and H^-1).
+  void add_shared_rounding(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq,
+                           DepthAlignment& out);
+  Matrix6d shared_rounding_spread(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq, int every);
 
   simd::AssociateFn associate_;  // the active kernel set's
   // The associations at the last linearisation (the first term_count_) and each one's image cell.
@@ -120,6 +130,14 @@ class DepthAligner {
   std::vector<Vector6d> cell_gradient_;
   std::vector<int> cell_count_;
   int cell_grid_ = 1, cells_x_ = 1;  // grid samples a cell, cells a row
+  double units_per_m_;
+  // Each depth unit's summed gradient (shared_rounding_spread), hashed, for prev's readings and
+  // curr's; a bucket counts only while its mark is the current reading's generation.
+  std::vector<Eigen::Matrix<float, 6, 1>> unit_gradient_prev_, unit_gradient_curr_;
+  std::vector<std::uint32_t> unit_mark_prev_, unit_mark_curr_;
+  std::uint32_t unit_generation_ = 0;
+  std::vector<int> touched_prev_, touched_curr_;
+  Matrix6d h_inv_ = Matrix6d::Zero();  // cluster_covariance's pseudo-inverse of H
 };
 
 // How far the depth alignment's own covariance may be trusted on this sensor, learnt online
