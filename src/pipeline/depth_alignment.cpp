@@ -278,8 +278,10 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   const double floor_r2 = 4.685 * 4.685 * quantum_sigma_m_ * quantum_sigma_m_;
   for (size_t a = 0; a < terms.size(); ++a) {
     const simd::Association& term = terms[a];
-    double robust = 0;
-    if (!robust_factor(term, cutoff2, floor_r2, robust)) continue;
+    const double r2 = static_cast<double>(term.r) * term.r;
+    const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
+    if (u2 >= 1) continue;
+    const double robust = (1 - u2) * (1 - u2);
     const double w = robust * term.w;
     Vector6d J;
     for (int e = 0; e < 6; ++e) J(e) = term.j[e];
@@ -305,11 +307,9 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   return eq;
 }
 
-bool DepthAligner::robust_factor(const simd::Association& term, double cutoff2, double floor_r2, double& robust) {
-  const double u2 = static_cast<double>(term.r) * term.r / std::max(cutoff2 / term.w, floor_r2);
-  if (u2 >= 1) return false;
-  robust = (1 - u2) * (1 - u2);
-  return true;
+float DepthAligner::term_weight(const simd::Association& term, const NormalEquations& eq) {
+  const double u2 = static_cast<double>(term.r) * term.r / std::max(eq.cutoff2 / term.w, eq.floor_r2);
+  return u2 < 1 ? static_cast<float>((1 - u2) * (1 - u2) * term.w) : 0.0f;
 }
 
 bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out) {
@@ -401,9 +401,8 @@ Matrix6d DepthAligner::shared_rounding_spread(const DepthCloud& prev, const Dept
   };
   for (size_t k = 0; k < term_count_; k += static_cast<size_t>(every)) {
     const simd::Association& term = terms_[k];
-    double robust = 0;
-    if (!robust_factor(term, eq.cutoff2, eq.floor_r2, robust)) continue;
-    const auto w = static_cast<float>(robust * term.w);
+    const float w = term_weight(term, eq);
+    if (!(w > 0)) continue;
     const auto pi = static_cast<size_t>(term.prev_index);
     const Eigen::Vector3f& q = prev.point[pi];
     const float along = w * prev.normal[pi].dot(q) / q.z();

@@ -102,10 +102,10 @@ class DepthAligner {
     Vector6d b = Vector6d::Zero();
     double s2 = 0;  // the a-posteriori variance factor
     int used = 0;   // associations with weight
-    double cutoff2 = 0, floor_r2 = 0;  // the robust weights' scale (robust_factor)
+    double cutoff2 = 0, floor_r2 = 0;  // the robust weights' scale: see term_weight()
   };
-  // Tukey's factor of an association's weight in those sums; false: it has none.
-  static bool robust_factor(const simd::Association& term, double cutoff2, double floor_r2, double& robust);
+  // An association's weight in those sums (0: none).
+  static float term_weight(const simd::Association& term, const NormalEquations& eq);
   // The steps of align(): the associations at T (terms_, term_cells_; `it` the iteration), the
   // robustly weighted sums over them (and each cell's gradient), the covariance from them.
   void associate(const DepthCloud& curr, const Eigen::Isometry3d& T, int it, simd::AssociateInput& in);
