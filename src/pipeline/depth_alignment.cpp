@@ -279,7 +279,7 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   for (size_t a = 0; a < terms.size(); ++a) {
     const simd::Association& term = terms[a];
     const double r2 = static_cast<double>(term.r) * term.r;
-    // term_weight()'s rule, written out: through a helper this loop cost 5 % more on ARM.
+    // term_weight()'s rule, written out: through a helper the ARM build's refine stage cost 5 % more.
     const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
     if (u2 >= 1) continue;
     const double robust = (1 - u2) * (1 - u2);
