@@ -175,8 +175,8 @@ DepthAligner::DepthAligner(const CameraConfig& camera, const RefinementConfig& r
       unit_gradient_curr_(kRoundingBuckets),
       unit_mark_prev_(kRoundingBuckets, 0u),
       unit_mark_curr_(kRoundingBuckets, 0u) {
-  touched_prev_.reserve(kRoundingBuckets);
-  touched_curr_.reserve(kRoundingBuckets);
+  shared_prev_.reserve(kRoundingBuckets);
+  shared_curr_.reserve(kRoundingBuckets);
 }
 
 void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& seed,
@@ -217,8 +217,9 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
     T = T * transform_from_xi(step);
     if (step.head<3>().norm() < kStepTranslationM && step.tail<3>().norm() < kStepRotationRad) break;
   }
-  if (!cluster_covariance(eq, out)) return;
-  add_shared_rounding(prev, curr, eq, out);
+  Matrix6d H_inv;
+  if (!cluster_covariance(eq, out, H_inv)) return;
+  add_shared_rounding(prev, curr, eq, H_inv, out);
   out.T_prev_curr = T;
   out.points = eq.used;
   out.ok = out.constrained > 0 && out.covariance.allFinite();
@@ -313,7 +314,7 @@ float DepthAligner::term_weight(const simd::Association& term, const NormalEquat
   return u2 < 1 ? static_cast<float>((1 - u2) * (1 - u2) * term.w) : 0.0f;
 }
 
-bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out) {
+bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out, Matrix6d& H_inv) const {
   // The covariance at the last linearisation: cells as clusters of correlated residuals.
   Matrix6d spread = Matrix6d::Zero();
   int cells = 0;
@@ -337,25 +338,24 @@ bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment&
       inv(k) = 1.0 / eig.eigenvalues()(e);
       ++k;
     }
-  const Matrix6d H_inv = basis * inv.asDiagonal() * basis.transpose();  // pseudo-inverse within the basis
+  H_inv = basis * inv.asDiagonal() * basis.transpose();  // pseudo-inverse within the basis
   // The clusters' spread (with the small-sample correction) and, so that few cells cannot leave
   // a direction without variance, the independent-residual term weighted by 6 / cells.
   const double n_cells = cells;
   out.covariance = H_inv * spread * H_inv * (n_cells / (n_cells - 1)) + H_inv * (eq.s2 * 6.0 / n_cells);
   out.covariance = 0.5 * (out.covariance + out.covariance.transpose());
-  h_inv_ = H_inv;
   out.basis = basis;
   out.constrained = k;
   return true;
 }
 
 void DepthAligner::add_shared_rounding(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq,
-                                       DepthAlignment& out) {
+                                       const Matrix6d& H_inv, DepthAlignment& out) {
   // A glance first, at every kRoundingGlance-th association: where the depth's noise swamps
   // its rounding (a Kinect's millimetres against 0.2 mm units) the shared part changes the
   // covariance by less than kRoundingNegligible in any direction and is left at that; where
   // it does not (exact depth), every association is read.
-  Matrix6d part = h_inv_ * shared_rounding_spread(prev, curr, eq, kRoundingGlance) * h_inv_;
+  Matrix6d part = H_inv * shared_rounding_spread(prev, curr, eq, kRoundingGlance) * H_inv;
   const int k = out.constrained;
   using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
   const Square V = out.basis.leftCols(k);
@@ -363,7 +363,7 @@ void DepthAligner::add_shared_rounding(const DepthCloud& prev, const DepthCloud&
   if (base.info() != Eigen::Success) return;
   // Its share in the whitened covariance: the trace bounds the largest direction's.
   const double share = base.solve(V.transpose() * part * V).trace();
-  if (!(share <= kRoundingNegligible)) part = h_inv_ * shared_rounding_spread(prev, curr, eq, 1) * h_inv_;
+  if (!(share <= kRoundingNegligible)) part = H_inv * shared_rounding_spread(prev, curr, eq, 1) * H_inv;
   out.covariance += 0.5 * (part + part.transpose());
 }
 
@@ -384,8 +384,8 @@ Matrix6d DepthAligner::shared_rounding_spread(const DepthCloud& prev, const Dept
     std::fill(unit_mark_curr_.begin(), unit_mark_curr_.end(), 0u);
     unit_generation_ = 2;
   }
-  touched_prev_.clear();
-  touched_curr_.clear();
+  shared_prev_.clear();
+  shared_curr_.clear();
   const auto units_per_m = static_cast<float>(units_per_m_);
   const auto add = [&](float depth_m, float scale, const float* j, std::vector<Eigen::Matrix<float, 6, 1>>& sums,
                        std::vector<std::uint32_t>& marks, std::vector<int>& shared) {
@@ -408,14 +408,14 @@ Matrix6d DepthAligner::shared_rounding_spread(const DepthCloud& prev, const Dept
     const Eigen::Vector3f& q = prev.point[pi];
     const float along = w * prev.normal[pi].dot(q) / q.z();
     add(curr.raw_depth[static_cast<size_t>(term.curr_index)], along, term.j, unit_gradient_curr_, unit_mark_curr_,
-        touched_curr_);
-    add(prev.raw_depth[pi], -along, term.j, unit_gradient_prev_, unit_mark_prev_, touched_prev_);
+        shared_curr_);
+    add(prev.raw_depth[pi], -along, term.j, unit_gradient_prev_, unit_mark_prev_, shared_prev_);
   }
   // The lower triangle only (rankUpdate): on exact depth thousands of units are shared.
   Matrix6d spread = Matrix6d::Zero();
-  for (int b : touched_prev_)
+  for (int b : shared_prev_)
     spread.selfadjointView<Eigen::Lower>().rankUpdate(unit_gradient_prev_[static_cast<size_t>(b)].cast<double>());
-  for (int b : touched_curr_)
+  for (int b : shared_curr_)
     spread.selfadjointView<Eigen::Lower>().rankUpdate(unit_gradient_curr_[static_cast<size_t>(b)].cast<double>());
   spread = spread.selfadjointView<Eigen::Lower>();
   // Read at every `every`-th association: each unit's sum is that share of its whole.

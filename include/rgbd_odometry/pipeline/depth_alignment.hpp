@@ -113,12 +113,13 @@ class DepthAligner {
   // c from the residuals at T: their median, net of rounding, against each association's
   // noise geometry (both depths along their rays, seen along the normal).
   double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
-  bool cluster_covariance(const NormalEquations& eq, DepthAlignment& out);
+  // H_inv: H's pseudo-inverse within the directions the surfaces constrain.
+  bool cluster_covariance(const NormalEquations& eq, DepthAlignment& out, Matrix6d& H_inv) const;
   // Adds to out.covariance what the rounding errors shared by samples read as one depth unit
   // do to the estimate; shared_rounding_spread is their spread over every `every`-th of the
   // last sums' associations (to go between H^-1 and H^-1).
   void add_shared_rounding(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq,
-                           DepthAlignment& out);
+                           const Matrix6d& H_inv, DepthAlignment& out);
   Matrix6d shared_rounding_spread(const DepthCloud& prev, const DepthCloud& curr, const NormalEquations& eq, int every);
 
   simd::AssociateFn associate_;  // the active kernel set's
@@ -136,8 +137,7 @@ class DepthAligner {
   std::vector<Eigen::Matrix<float, 6, 1>> unit_gradient_prev_, unit_gradient_curr_;
   std::vector<std::uint32_t> unit_mark_prev_, unit_mark_curr_;
   std::uint32_t unit_generation_ = 0;
-  std::vector<int> touched_prev_, touched_curr_;
-  Matrix6d h_inv_ = Matrix6d::Zero();  // cluster_covariance's pseudo-inverse of H
+  std::vector<int> shared_prev_, shared_curr_;  // the buckets read more than once
 };
 
 // How far the depth alignment's own covariance may be trusted on this sensor, learnt online
