@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -28,8 +29,28 @@ constexpr double kBiasPriorSigma = 0.2;
 // The curvature of the cost is read this many grid steps either side of its minimum: wide
 // enough that the noise of the sums does not dominate it, narrow enough to stay in the valley.
 constexpr int kCurvatureSteps = 3;
-// A pair whose residual at the known latency is beyond chi-square(3) 99.9 % is a failed fit's.
-constexpr double kChi2_3_999 = 16.27;
+// A pair whose residual at the known latency lies beyond the 99.9 % point of its predictive
+// distribution is a failed fit's: 3 F(3, dof), the scatter being estimated from dof degrees of
+// freedom (chi-square(3)'s 16.27 once they are many). Tabled against dof, interpolated in 1/dof.
+struct GateQuantile {
+  double dof, quantile;
+};
+// chi-square(3)'s median: a pair's squared residual over it estimates the scatter (per axis).
+constexpr double kChi2_3_Median = 2.366;
+// The fewest judged pairs whose median bounds the scatter.
+constexpr std::size_t kLeastJudged = 7;
+constexpr std::array<GateQuantile, 12> kGate999{{{3, 423.3},
+                                                 {4, 168.5},
+                                                 {5, 99.6},
+                                                 {7, 56.3},
+                                                 {10, 37.7},
+                                                 {15, 28.0},
+                                                 {20, 24.3},
+                                                 {30, 21.2},
+                                                 {50, 19.0},
+                                                 {100, 17.6},
+                                                 {200, 16.9},
+                                                 {1e12, 16.27}}};
 // A pair turned the camera when its rotation is this many sigma from none.
 constexpr double kTurningChi2 = 9.0;
 // A pair's rotation noise before the residuals show it, rad^2 per axis (0.1 degree), and the
@@ -154,7 +175,10 @@ void CaptureLatencyEstimator::process(const Pair& p) {
     const double at = (estimate_.latency_s - config_.min_s) / (kStepNs * 1e-9);
     const int k = std::clamp(static_cast<int>(std::lround(at)), 0, offsets_ - 1);
     const Eigen::Vector3d r = residual[static_cast<std::size_t>(k)] + estimate_.gyro_bias * dt;
-    if (r.squaredNorm() > kChi2_3_999 * std::max(estimate_.scatter, kLeastNoise)) {
+    judged_r2_[judged_next_] = r.squaredNorm();
+    judged_next_ = (judged_next_ + 1) % judged_r2_.size();
+    judged_count_ = std::min(judged_count_ + 1, judged_r2_.size());
+    if (outside_gate(r, residual, k)) {
       ++estimate_.rejected;
       return;
     }
@@ -186,6 +210,37 @@ void CaptureLatencyEstimator::process(const Pair& p) {
     sum_rr_[static_cast<std::size_t>(k)] += r.cwiseProduct(r);
   }
   solve();
+}
+
+bool CaptureLatencyEstimator::outside_gate(const Eigen::Vector3d& r, const std::vector<Eigen::Vector3d>& residual,
+                                           int k) const {
+  // Early on the latency itself is uncertain: a pair whose rate changed moves its residual by
+  // the latency's error times that change (g, the residual's slope over the offsets). Its
+  // variance s I + sigma^2 g g^T, inverted by Sherman-Morrison.
+  const int before = std::max(k - 1, 0), after = std::min(k + 1, offsets_ - 1);
+  const Eigen::Vector3d g = (residual[static_cast<std::size_t>(after)] - residual[static_cast<std::size_t>(before)]) /
+                            ((after - before) * kStepNs * 1e-9);
+  // The scatter is the fit's, of the pairs let in. Should the pairs become noisier than the
+  // first few (a sensor's start-up, a scene that changed), the gate would turn them all away
+  // and the fit never learn it: the median of the last pairs judged, all of them, bounds it
+  // from below (a failed fit now and then does not move a median).
+  double s = std::max(estimate_.scatter, kLeastNoise);
+  if (judged_count_ >= kLeastJudged) {
+    std::array<double, kJudgedPairs> recent{};
+    std::copy_n(judged_r2_.begin(), judged_count_, recent.begin());
+    const auto mid = recent.begin() + static_cast<std::ptrdiff_t>(judged_count_ / 2);
+    std::nth_element(recent.begin(), mid, recent.begin() + static_cast<std::ptrdiff_t>(judged_count_));
+    s = std::max(s, *mid / kChi2_3_Median);
+  }
+  const double v = estimate_.sigma_s * estimate_.sigma_s;
+  const double rg = r.dot(g);
+  const double mahalanobis = (r.squaredNorm() - v * rg * rg / (s + v * g.squaredNorm())) / s;
+  const double dof = 3 * weight_sum_ - 4;
+  auto upper = std::find_if(kGate999.begin(), kGate999.end(), [&](const GateQuantile& q) { return q.dof >= dof; });
+  if (upper == kGate999.begin()) return mahalanobis > upper->quantile;
+  const GateQuantile& lo = *(upper - 1);
+  const double share = (1 / lo.dof - 1 / dof) / (1 / lo.dof - 1 / upper->dof);
+  return mahalanobis > lo.quantile + share * (upper->quantile - lo.quantile);
 }
 
 namespace {

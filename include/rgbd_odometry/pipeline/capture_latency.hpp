@@ -24,6 +24,7 @@
 // the gyro's (with the bias as offset) is an absolute-orientation fit (core/umeyama.hpp) at the
 // estimated latency, over the last pairs that turned the camera.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -106,6 +107,13 @@ class CaptureLatencyEstimator {
   Eigen::Vector3d sum_tt_ = Eigen::Vector3d::Zero();
   std::vector<Eigen::Vector3d> sum_tr_, sum_rr_;
   double weight_sum_ = 0;  // pairs, faded as the sums are
+  // The squared residuals of the last pairs judged against the estimate, let in or not.
+  static constexpr std::size_t kJudgedPairs = 31;
+  std::array<double, kJudgedPairs> judged_r2_{};
+  std::size_t judged_next_ = 0, judged_count_ = 0;
+  // Whether a pair's residual r at the estimate (grid index k of its residuals over the offsets)
+  // lies beyond what the estimate predicts: a failed fit's.
+  bool outside_gate(const Eigen::Vector3d& r, const std::vector<Eigen::Vector3d>& residual, int k) const;
   std::vector<Gyro> gyro_;  // ring
   std::size_t gyro_first_ = 0, gyro_count_ = 0;
   std::vector<Pair> waiting_;  // ring: pairs the gyro does not cover yet
