@@ -35,10 +35,6 @@ constexpr int kCurvatureSteps = 3;
 struct GateQuantile {
   double dof, quantile;
 };
-// chi-square(3)'s median: a pair's squared residual over it estimates the scatter (per axis).
-constexpr double kChi2_3_Median = 2.366;
-// The fewest judged pairs whose median bounds the scatter.
-constexpr std::size_t kLeastJudged = 7;
 constexpr std::array<GateQuantile, 12> kGate999{{{3, 423.3},
                                                  {4, 168.5},
                                                  {5, 99.6},
@@ -51,6 +47,10 @@ constexpr std::array<GateQuantile, 12> kGate999{{{3, 423.3},
                                                  {100, 17.6},
                                                  {200, 16.9},
                                                  {1e12, 16.27}}};
+// chi-square(3)'s median: a pair's squared residual over it estimates the scatter (per axis).
+constexpr double kChi2_3_Median = 2.366;
+// The fewest judged pairs whose median bounds the scatter.
+constexpr std::size_t kLeastJudged = 7;
 // A pair turned the camera when its rotation is this many sigma from none.
 constexpr double kTurningChi2 = 9.0;
 // A pair's rotation noise before the residuals show it, rad^2 per axis (0.1 degree), and the
