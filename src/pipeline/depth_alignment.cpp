@@ -205,10 +205,14 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
   in.max_d2 = static_cast<float>(config_.max_distance_m * config_.max_distance_m);
   in.coeff = static_cast<float>(depth_noise_coeff_);
   in.floor2 = static_cast<float>(2 * quantum_sigma_m_ * quantum_sigma_m_);
+  // The cells' sums serve the covariance alone, at the last linearisation: summed on the last
+  // step, or after the loop where an earlier step ended it.
+  bool cells_summed = false;
   for (int it = 0; it < config_.iterations; ++it) {
     associate(curr, T, it, in);
     if (static_cast<int>(term_count_) < config_.min_points) return;
-    eq = weighted_normal_equations();
+    cells_summed = it == config_.iterations - 1;
+    eq = cells_summed ? weighted_normal_equations<true>() : weighted_normal_equations<false>();
     if (eq.used < config_.min_points) return;
     const Eigen::LDLT<Matrix6d> ldlt(eq.H);
     if (ldlt.info() != Eigen::Success) return;
@@ -217,6 +221,7 @@ void DepthAligner::align(const DepthCloud& prev, const DepthCloud& curr, const E
     T = T * transform_from_xi(step);
     if (step.head<3>().norm() < kStepTranslationM && step.tail<3>().norm() < kStepRotationRad) break;
   }
+  if (!cells_summed) sum_cells(eq);
   Matrix6d H_inv;
   if (!cluster_covariance(eq, out, H_inv)) return;
   add_shared_rounding(prev, curr, eq, H_inv, out);
@@ -254,6 +259,7 @@ void DepthAligner::associate(const DepthCloud& curr, const Eigen::Isometry3d& T,
   }
 }
 
+template <bool kCells>
 DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   const std::span<const simd::Association> terms(terms_.data(), term_count_);
   // Tukey's biweight on the normalised residuals, its scale their median absolute deviation
@@ -271,8 +277,10 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   std::array<double, 21> h{};  // the lower triangle of H, row by row
   Vector6d b = Vector6d::Zero();
   int used = 0;
-  std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
-  std::fill(cell_count_.begin(), cell_count_.end(), 0);
+  if constexpr (kCells) {
+    std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
+    std::fill(cell_count_.begin(), cell_count_.end(), 0);
+  }
   double sum_wr2 = 0, sum_weight = 0;
   // No cutoff below the depth's quantisation: exact depth has residuals of rounding only,
   // whose median says nothing of which associations are wrong.
@@ -280,7 +288,7 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   for (size_t a = 0; a < terms.size(); ++a) {
     const simd::Association& term = terms[a];
     const double r2 = static_cast<double>(term.r) * term.r;
-    // term_weight()'s rule, written out: through a helper the ARM build's refine stage cost 5 % more.
+    // robust_share()'s rule, written out: through a helper the ARM build's refine stage cost 5 % more.
     const double u2 = r2 / std::max(cutoff2 / term.w, floor_r2);
     if (u2 >= 1) continue;
     const double robust = (1 - u2) * (1 - u2);
@@ -293,9 +301,11 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
     b += wr * J;
     sum_wr2 += wr * term.r;
     sum_weight += robust;
-    const auto cell = static_cast<size_t>(term_cells_[a]);
-    cell_gradient_[cell] += wr * J;
-    ++cell_count_[cell];
+    if constexpr (kCells) {
+      const auto cell = static_cast<size_t>(term_cells_[a]);
+      cell_gradient_[cell] += wr * J;
+      ++cell_count_[cell];
+    }
     ++used;
   }
   NormalEquations eq;
@@ -309,9 +319,30 @@ DepthAligner::NormalEquations DepthAligner::weighted_normal_equations() {
   return eq;
 }
 
-float DepthAligner::term_weight(const simd::Association& term, const NormalEquations& eq) {
+double DepthAligner::robust_share(const simd::Association& term, const NormalEquations& eq) {
   const double u2 = static_cast<double>(term.r) * term.r / std::max(eq.cutoff2 / term.w, eq.floor_r2);
-  return u2 < 1 ? static_cast<float>((1 - u2) * (1 - u2) * term.w) : 0.0f;
+  return u2 < 1 ? (1 - u2) * (1 - u2) : 0.0;
+}
+
+float DepthAligner::term_weight(const simd::Association& term, const NormalEquations& eq) {
+  return static_cast<float>(robust_share(term, eq) * term.w);
+}
+
+void DepthAligner::sum_cells(const NormalEquations& eq) {
+  // weighted_normal_equations<true>'s cell sums, term for term in the same arithmetic.
+  std::fill(cell_gradient_.begin(), cell_gradient_.end(), Vector6d::Zero());
+  std::fill(cell_count_.begin(), cell_count_.end(), 0);
+  for (size_t a = 0; a < term_count_; ++a) {
+    const simd::Association& term = terms_[a];
+    const double robust = robust_share(term, eq);
+    if (!(robust > 0)) continue;
+    const double wr = robust * term.w * term.r;
+    Vector6d J;
+    for (int e = 0; e < 6; ++e) J(e) = term.j[e];
+    const auto cell = static_cast<size_t>(term_cells_[a]);
+    cell_gradient_[cell] += wr * J;
+    ++cell_count_[cell];
+  }
 }
 
 bool DepthAligner::cluster_covariance(const NormalEquations& eq, DepthAlignment& out, Matrix6d& H_inv) const {

@@ -104,12 +104,16 @@ class DepthAligner {
     int used = 0;   // associations with weight
     double cutoff2 = 0, floor_r2 = 0;  // the robust weights' scale: see term_weight()
   };
-  // An association's weight in those sums (0: none).
+  // An association's robust weight, Tukey's share of its own (0: none), and its weight in those sums.
+  static double robust_share(const simd::Association& term, const NormalEquations& eq);
   static float term_weight(const simd::Association& term, const NormalEquations& eq);
   // The steps of align(): the associations at T (terms_, term_cells_; `it` the iteration), the
-  // robustly weighted sums over them (and each cell's gradient), the covariance from them.
+  // robustly weighted sums over them (with kCells, each cell's gradient too; sum_cells() adds
+  // those to sums made without), the covariance from them.
   void associate(const DepthCloud& curr, const Eigen::Isometry3d& T, int it, simd::AssociateInput& in);
+  template <bool kCells>
   NormalEquations weighted_normal_equations();
+  void sum_cells(const NormalEquations& eq);
   // c from the residuals at T: their median, net of rounding, against each association's
   // noise geometry (both depths along their rays, seen along the normal).
   double residual_noise_coeff(const DepthCloud& prev, const DepthCloud& curr, const Eigen::Isometry3d& T);
