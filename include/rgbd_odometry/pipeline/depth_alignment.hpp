@@ -102,7 +102,7 @@ class DepthAligner {
     Vector6d b = Vector6d::Zero();
     double s2 = 0;  // the a-posteriori variance factor
     int used = 0;   // associations with weight
-    double cutoff2 = 0, floor_r2 = 0;  // the robust weights' scale: see term_weight()
+    double cutoff2 = 0, floor_r2 = 0;  // the robust weights' scale: see robust_share()
   };
   // An association's robust weight, Tukey's share of its own (0: none), and its weight in those sums.
   static double robust_share(const simd::Association& term, const NormalEquations& eq);
