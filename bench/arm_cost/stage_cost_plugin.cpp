@@ -4,13 +4,21 @@
 // At exit it writes one line per stage to the file named by its argument out=FILE:
 //   STAGE_NAME INSTRUCTIONS ENTRIES
 // ENTRIES counts the marks that entered the stage (frames for mask, pairs for match).
+// Then, per frame, one line "frame_start I_0 ... I_14": the stages' instructions counted so far
+// on the thread that processes the frames, at its mark that enters the mask stage (a frame's
+// first stage); and a last such line at exit. Consecutive differences are what each frame cost
+// that thread, stage by stage. Work on other threads (the reader's conversion) is left out: it
+// would fall into whichever frame it ran beside.
 //
 // Declarations: the few parts of qemu's plugin API used here, written from its documented
 // signatures (qemu-plugin.h of qemu 7.2; no qemu headers are packaged in Debian).
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
+#include <vector>
 
 #include "rgbd_odometry/core/cost_stage.hpp"
 
@@ -51,6 +59,10 @@ struct ThreadCount {
 };
 ThreadCount g_threads[kMaxThreads];
 const char* g_out = "stage_cost.txt";
+std::mutex g_frame_starts_mutex;
+using StageTotals = std::array<std::uint64_t, kCostStageCount>;
+std::vector<StageTotals> g_frame_starts;  // the processing thread's counts at each frame's first mark
+unsigned g_frame_vcpu = 0;                 // the processing thread's vCPU
 
 ThreadCount& thread_count(unsigned vcpu) { return g_threads[vcpu < kMaxThreads ? vcpu : kMaxThreads - 1]; }
 
@@ -60,6 +72,13 @@ void on_block(unsigned vcpu, void* n_insns) {
   ThreadCount& t = thread_count(vcpu);
   t.instructions[t.stage.load(std::memory_order_relaxed)].fetch_add(reinterpret_cast<std::uintptr_t>(n_insns),
                                                                      std::memory_order_relaxed);
+}
+
+StageTotals stage_totals(unsigned vcpu) {
+  StageTotals totals{};
+  const ThreadCount& t = thread_count(vcpu);
+  for (std::size_t s = 0; s < kCostStageCount; ++s) totals[s] = t.instructions[s].load(std::memory_order_relaxed);
+  return totals;
 }
 
 void on_translate(qemu_plugin_id_t, struct qemu_plugin_tb* tb) {
@@ -77,6 +96,11 @@ void on_syscall(qemu_plugin_id_t, unsigned vcpu, std::int64_t num, std::uint64_t
   ThreadCount& t = thread_count(vcpu);
   t.stage = stage;
   t.entries[stage].fetch_add(1, std::memory_order_relaxed);
+  if (stage == static_cast<std::uint32_t>(rgbdo::CostStage::Mask)) {
+    const std::lock_guard<std::mutex> lock(g_frame_starts_mutex);
+    g_frame_vcpu = vcpu;
+    g_frame_starts.push_back(stage_totals(vcpu));
+  }
 }
 
 void on_exit(qemu_plugin_id_t, void*) {
@@ -93,6 +117,13 @@ void on_exit(qemu_plugin_id_t, void*) {
     }
     std::fprintf(f, "%s %llu %llu\n", rgbdo::kCostStageNames[s], static_cast<unsigned long long>(instructions),
                  static_cast<unsigned long long>(entries));
+  }
+  const std::lock_guard<std::mutex> lock(g_frame_starts_mutex);
+  g_frame_starts.push_back(stage_totals(g_frame_vcpu));
+  for (const StageTotals& totals : g_frame_starts) {
+    std::fprintf(f, "frame_start");
+    for (const std::uint64_t n : totals) std::fprintf(f, " %llu", static_cast<unsigned long long>(n));
+    std::fprintf(f, "\n");
   }
   std::fclose(f);
 }

@@ -110,11 +110,14 @@ class KeyframeTracker {
     int inliers = 0;
   };
 
-  // curr against kf, starting from the prediction T_pred: false when too few pairs or inliers.
+  // curr against kf, starting from the prediction T_pred: false when too few pairs or inliers,
+  // or, where the depth is aligned, too few to hold kf.
   bool measure(const Keyframe& kf, const ProcessedFrame& curr, const Eigen::Isometry3d& T_pred, Measurement& out);
-  // The two depth maps' alignment, started at out.T, fused into out where the pair stage
-  // trusts the sensor's depth (PairResult::depth_trusted) and both frames' depth and colour
-  // were taken together (the alignment measures the motion between the depth instants).
+  // Whether the pair stage trusts the sensor's depth (PairResult::depth_trusted) and both
+  // frames' depth and colour were taken together (the alignment measures the motion between
+  // the depth instants).
+  bool depth_alignable(const Keyframe& kf, const ProcessedFrame& curr) const;
+  // The two depth maps' alignment, started at out.T, fused into out.
   void refine_with_depth(const Keyframe& kf, const ProcessedFrame& curr, Measurement& out);
   // Whether the measurement agrees with the prediction (chi^2 gate of fuse_estimates).
   bool agree(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z) const;
