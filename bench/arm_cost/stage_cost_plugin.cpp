@@ -8,7 +8,8 @@
 // on the thread that processes the frames, at its mark that enters the mask stage (a frame's
 // first stage); and a last such line at exit. Consecutive differences are what each frame cost
 // that thread, stage by stage. Work on other threads (the reader's conversion) is left out: it
-// would fall into whichever frame it ran beside.
+// would fall into whichever frame it ran beside. So a frame's stages must run on one thread:
+// arm_cost.cmake runs one processing thread (with two, estimation would count as elsewhere).
 //
 // Declarations: the few parts of qemu's plugin API used here, written from its documented
 // signatures (qemu-plugin.h of qemu 7.2; no qemu headers are packaged in Debian).

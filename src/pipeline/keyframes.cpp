@@ -262,7 +262,7 @@ void KeyframeTracker::refine_with_depth(const Keyframe& kf, const ProcessedFrame
     // some frames back that errs beyond its covariance (ICL-NUIM: 0.5-2.5 mm against a sigma of
     // 0.3-0.5 mm, where the alignment is within a tenth of a millimetre of the chain), and kept
     // it would fail the chain's gate and abandon a keyframe that still holds (9 keyframes made
-    // on the bundled head, 4 with the alignment alone). Alone, the alignment must constrain
+    // on the ICL-NUIM head's 100 frames, 4 with the alignment alone). Alone, the alignment must constrain
     // every direction; the chain's gate still judges it.
     if (alignment_.constrained == 6) {
       out.T = alignment_.T_prev_curr;
