@@ -8,6 +8,7 @@
 #include <span>
 #include <opencv2/calib3d.hpp>
 
+#include "rgbd_odometry/pipeline/backproject.hpp"
 #include "rgbd_odometry/simd/kernels.hpp"
 
 namespace rgbdo {
@@ -30,9 +31,6 @@ constexpr double kChi2Median1 = 0.4549;
 constexpr int kNormalReach = 1;
 // The Gauss-Newton steps stop below these (m, rad).
 constexpr double kStepTranslationM = 1e-5, kStepRotationRad = 1e-5;
-// The lens model's inversion for the grid's rays: converged to 0.001 px by 20 steps over
-// TUM fr1's whole image.
-constexpr int kLensInversionSteps = 50;
 // The shared rounding's depth units hashed into this many buckets: two units 0.8 m apart
 // (at 5000 units/m) sharing one are counted as one (measured: no different from 65536).
 constexpr int kRoundingBuckets = 4096;
@@ -84,8 +82,7 @@ DepthCloudBuilder::DepthCloudBuilder(const CameraConfig& camera, const DepthConf
   }
   // Iterated to convergence, once: OpenCV's default 5 steps leave up to 0.13 px at the corners
   // of TUM fr1's lens, where the grid still samples (0.7 px behind a shorter focal length).
-  cv::undistortPoints(nearest, rays, K, distortion, cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT, kLensInversionSteps, 0));
+  undistort_pixels_exactly(camera, nearest, rays);
   for (const cv::Point2f& r : rays) ray_.emplace_back(r.x, r.y);
   if (refinement.average_depth)
     for (size_t k = 0; k < pixel_.size(); ++k) {
