@@ -102,6 +102,14 @@ Scene scene(const std::vector<Plane>& planes, const Eigen::Isometry3d& T_prev_cu
 
 RefinementConfig refinement() { return RefinementConfig{}; }
 
+// Each sample its one pixel (refinement.average_depth off): the sampling whose limits the
+// tests below measure.
+RefinementConfig one_pixel_a_sample() {
+  RefinementConfig r;
+  r.average_depth = false;
+  return r;
+}
+
 TEST(DepthAlignment, ItsCloudReadsTheDepthWhereItsImageRegistersAgainstTheColour) {
   // GIVEN fr1's lens, a depth image registered 0.77 px right and 1.11 px up of the colour
   // (a surface the colour shows at (u, v) is at (u - 0.77, v + 1.11) in the depth), and a
@@ -252,12 +260,12 @@ TEST(DepthAlignment, SamplesReadAsOneDepthUnitShareItsRoundingAndItsCovarianceCo
   // rounding errors are shared; 24 positions a few centimetres apart (each its own rounding)
   // and one small motion
   const Eigen::Isometry3d truth = motion(0.002, -0.001, 0.003, 0.001, -0.002, 0.0005);
-  DepthAligner aligner(camera(), refinement(), 1.425e-3, 5000);
+  DepthAligner aligner(camera(), one_pixel_a_sample(), 1.425e-3, 5000);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> offset(-0.03, 0.03);
   std::vector<double> nees;
   for (unsigned trial = 1; trial <= 24; ++trial) {
-    const Scene s = scene_with_noise_law(truth, 0, trial, refinement(), motion(offset(rng), offset(rng), offset(rng), 0, 0, 0));
+    const Scene s = scene_with_noise_law(truth, 0, trial, one_pixel_a_sample(), motion(offset(rng), offset(rng), offset(rng), 0, 0, 0));
     DepthAlignment a;
     aligner.align(s.prev, s.curr, truth, a);
     ASSERT_TRUE(a.ok);
@@ -308,12 +316,12 @@ TEST(DepthAlignment, UnderMotionThePreviousFramesNormalNoiseShrinksItsMotion) {
   // room moved 12 mm sideways, exact but for the previous frame's normals (taken from a
   // rendering with the Kinect's depth noise), or for its points (the same noise, exact normals)
   const Eigen::Isometry3d truth = motion(0.012, 0, 0, 0, 0, 0);
-  DepthAligner aligner(camera(), refinement(), 1.425e-3, 5000);
+  DepthAligner aligner(camera(), one_pixel_a_sample(), 1.425e-3, 5000);
   constexpr int kDraws = 12;
   double noisy_normals_x = 0, noisy_points_x = 0;
   for (unsigned trial = 1; trial <= kDraws; ++trial) {
-    const Scene noisy = scene_with_noise_law(truth, 1.425e-3, 300 + trial);
-    Scene normals_only = scene_with_noise_law(truth, 0, 300 + trial), points_only = normals_only;
+    const Scene noisy = scene_with_noise_law(truth, 1.425e-3, 300 + trial, one_pixel_a_sample());
+    Scene normals_only = scene_with_noise_law(truth, 0, 300 + trial, one_pixel_a_sample()), points_only = normals_only;
     normals_only.prev.normal = noisy.prev.normal;
     points_only.prev.point = noisy.prev.point;
     // WHEN each is aligned from the truth
@@ -337,13 +345,13 @@ TEST(DepthAlignment, AveragedSamplesTakeTheNormalNoiseBiasAway) {
   // GIVEN the same 12 mm sideways motion, both frames with the Kinect's depth noise, sampled
   // one pixel a sample or averaged over 5x5 (refinement.average_depth)
   const Eigen::Isometry3d truth = motion(0.012, 0, 0, 0, 0, 0);
-  DepthAligner aligner(camera(), refinement(), 1.425e-3, 5000);
+  DepthAligner aligner(camera(), one_pixel_a_sample(), 1.425e-3, 5000);
   RefinementConfig averaged = refinement();
-  averaged.average_depth = true;
+  ASSERT_TRUE(averaged.average_depth);  // the shipped sampling
   constexpr int kDraws = 12;
   double single_x = 0, averaged_x = 0;
   for (unsigned trial = 1; trial <= kDraws; ++trial)
-    for (auto [sampling, sum] : {std::pair{refinement(), &single_x}, std::pair{averaged, &averaged_x}}) {
+    for (auto [sampling, sum] : {std::pair{one_pixel_a_sample(), &single_x}, std::pair{averaged, &averaged_x}}) {
       Scene scene = scene_with_noise_law(truth, 1.425e-3, 300 + trial, sampling);
       // WHEN aligned from the truth
       DepthAlignment a;

@@ -269,41 +269,38 @@ ChainRun run_chain(NoisyIcl& icl) {
 }
 
 TEST(Keyframes, TheChainsCovarianceCoversThePoseWhereIntegratedPairsWouldGrow) {
-  // Measured: median NEES 0.06 (chain), 99.6 % of the frames under the gate, both covariances
-  // wide (mean 0.26 chain, 0.02 integrated; 6 when consistent); position sigma at the end
-  // 19.3 mm (chain) and 148 mm (integrated), the error 1.4 mm. The chain's grows at each new
-  // keyframe, by what the pull leaves of the pairs' covariance. (The mean is not asserted: the
-  // frames at the sway's turns, where the motion reverses within a frame, reach NEES 30-260,
-  // and how far moves with the last bits of the arithmetic.)
+  // Measured: median NEES 0.20 (chain), 99.6 % of the frames under the gate, both covariances
+  // wide (mean 0.49 chain, 0.02 integrated; 6 when consistent); position sigma at the end
+  // 3.79 mm (chain) and 88.1 mm (integrated), the error 0.45 mm. The chain's is a bound
+  // whatever its errors share (KeyframeTracker::extended): wide where they share little. (The
+  // mean is not asserted: the frames at the sway's turns, where the motion reverses within a
+  // frame, reach NEES 30-260, and how far moves with the last bits of the arithmetic.)
   NoisyIcl icl;
   const ChainRun run = run_chain(icl);
-  EXPECT_GT(run.median_chain, 0.04);  // and never over-confident
-  EXPECT_LT(run.median_chain, 0.09);
+  EXPECT_GT(run.median_chain, 0.14);  // and never over-confident
+  EXPECT_LT(run.median_chain, 0.28);
   EXPECT_GE(run.within_gate, 0.99);
-  EXPECT_LT(run.sigma_chain_mm, 0.16 * run.sigma_integrated_mm);
-  EXPECT_LT(run.error_mm, 2.0);
+  EXPECT_LT(run.sigma_chain_mm, 0.06 * run.sigma_integrated_mm);
+  EXPECT_LT(run.error_mm, 0.7);
 }
 
-TEST(Keyframes, WhereTheKeyframesMeasurementIsPreciseTheChainsCovarianceStillCoversIt) {
-  // The same with refinement.average_depth: the keyframe's measurement, fused with the depth
-  // maps' alignment at the learnt factors, is precise, and its error is mostly the keyframe's
-  // own, the same in every measurement against it. Measured: median NEES 3.31, 94.0 % of the
-  // frames under the gate, position sigma at the end 1.21 mm, the error 1.76 mm; reported with
-  // the covariance of independent errors, (1-g)^2 P + g^2 R, median 10.9 and 59.1 % under the
-  // gate (sigma at the end 0.79 mm).
+TEST(Keyframes, OnePixelASampleTheChainsCovarianceStillCoversThePose) {
+  // The same with each depth sample its one pixel (refinement.average_depth off): the depth
+  // maps' alignment errs more, pair by pair and against the keyframe, and the bound grows with
+  // it. Measured: median NEES 0.00, 100 % of the frames under the gate, position sigma at the
+  // end 94.2 mm (chain) and 147.7 mm (integrated), the error 1.44 mm.
   NoisyIcl icl;
-  icl.config().refinement.average_depth = true;
+  icl.config().refinement.average_depth = false;
   const ChainRun run = run_chain(icl);
-  EXPECT_GT(run.median_chain, 2.3);
-  EXPECT_LT(run.median_chain, 5.0);
-  EXPECT_GE(run.within_gate, 0.9);
-  EXPECT_LT(run.error_mm, 2.2);
+  EXPECT_GE(run.within_gate, 0.99);
+  EXPECT_LT(run.sigma_chain_mm, 0.8 * run.sigma_integrated_mm);
+  EXPECT_LT(run.error_mm, 2.0);
 }
 
 TEST(Keyframes, BackAtAnEarlierViewThePoseReturnsToIt) {
   // The bundled frames out and back three times, keyframes made often (min_inlier_share 0.9)
-  // so that the way back returns to kept ones. Measured: the end 4.90 mm from the start with
-  // keyframes (23 made, 13 returns to a kept one), 16.76 mm frame to frame.
+  // so that the way back returns to kept ones. Measured: the end 3.89 mm from the start with
+  // keyframes (23 made, 13 returns to a kept one), 9.46 mm frame to frame.
   NoisyIcl icl;
   icl.config().keyframes.min_inlier_share = 0.9;
   std::vector<size_t> order;
@@ -319,7 +316,8 @@ TEST(Keyframes, BackAtAnEarlierViewThePoseReturnsToIt) {
               1e3 * with.end.translation().norm(), with.created, with.returned, 1e3 * without.end.translation().norm());
   EXPECT_GE(with.returned, 8);
   EXPECT_GE(with.created, 3);
-  EXPECT_LT(with.end.translation().norm(), 0.4 * without.end.translation().norm());
+  EXPECT_LT(with.end.translation().norm(), 0.5 * without.end.translation().norm());
+  EXPECT_LT(with.end.translation().norm(), 0.0045);
 }
 
 }  // namespace

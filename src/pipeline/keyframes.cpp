@@ -149,17 +149,23 @@ KeyframeTracker::KeyframeTracker(const PipelineConfig& config)
   }
 }
 
-bool KeyframeTracker::agree(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z) const {
-  Eigen::Isometry3d fused;
-  Matrix6d fused_cov;
-  return fuse_estimates(T_pred, cov_pred.independent, z.T, z.covariance, Matrix6d::Identity(), 6, fused, fused_cov);
+Matrix6d KeyframeTracker::extended(const Matrix6d& chain, const Matrix6d& step) {
+  const double tc = chain.trace(), ts = step.trace();
+  if (!(tc > 0 && ts > 0)) return chain + step;
+  const double a = std::sqrt(ts / tc);
+  return (1 + a) * chain + (1 + 1 / a) * step;
 }
 
-void KeyframeTracker::correct(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z) {
+bool KeyframeTracker::agree(const Eigen::Isometry3d& T_pred, const Matrix6d& cov_pred, const Measurement& z) const {
+  Eigen::Isometry3d fused;
+  Matrix6d fused_cov;
+  return fuse_estimates(T_pred, cov_pred, z.T, z.covariance, Matrix6d::Identity(), 6, fused, fused_cov);
+}
+
+void KeyframeTracker::correct(const Eigen::Isometry3d& T_pred, const Matrix6d& cov_pred, const Measurement& z) {
   const double g = config_.keyframes.gain;
   T_kf_curr_ = orthonormalised(T_pred * transform_from_xi(g * right_perturbation_between(T_pred, z.T)));
-  cov_kf_curr_.independent = (1 - g) * (1 - g) * cov_pred.independent + g * g * z.covariance;
-  cov_kf_curr_.bound = (1 - g) * cov_pred.bound + g * z.covariance;
+  cov_kf_curr_ = (1 - g) * cov_pred + g * z.covariance;
 }
 
 bool KeyframeTracker::holds(const Keyframe& kf, int inliers) const {
@@ -274,9 +280,9 @@ void KeyframeTracker::refine_with_depth(const Keyframe& kf, const ProcessedFrame
   out.covariance = fused_cov;
 }
 
-KeyframeTracker::ChainCovariance KeyframeTracker::pose_covariance() const {
-  if (active_ < 0) return {};
-  return kept_[static_cast<size_t>(active_)].pose_covariance.carried(se3_adjoint(T_kf_curr_.inverse())) + cov_kf_curr_;
+Matrix6d KeyframeTracker::pose_covariance() const {
+  if (active_ < 0) return Matrix6d::Zero();
+  return carried(kept_[static_cast<size_t>(active_)].pose_covariance, se3_adjoint(T_kf_curr_.inverse())) + cov_kf_curr_;
 }
 
 int KeyframeTracker::most_overlapping(int except) const {
@@ -306,7 +312,7 @@ int KeyframeTracker::most_overlapping(int except) const {
 }
 
 void KeyframeTracker::make_keyframe(const ProcessedFrame& curr) {
-  const ChainCovariance pose_cov = pose_covariance();
+  const Matrix6d pose_cov = pose_covariance();
   // A free slot, or the least recently used keyframe's.
   const auto slot = static_cast<size_t>(
       std::min_element(kept_.begin(), kept_.end(),
@@ -338,7 +344,7 @@ void KeyframeTracker::make_keyframe(const ProcessedFrame& curr) {
   kf.last_used = frames_;
   active_ = static_cast<int>(slot);
   T_kf_curr_ = Eigen::Isometry3d::Identity();
-  cov_kf_curr_ = {};
+  cov_kf_curr_ = Matrix6d::Zero();
 }
 
 void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
@@ -381,8 +387,8 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   // The frame pair predicts; the keyframe measures.
   const Matrix6d carry = se3_adjoint(pair.T_prev_curr.inverse());
   const Eigen::Isometry3d T_pred = T_kf_prev * pair.T_prev_curr;
-  const ChainCovariance cov_pred =
-      cov_kf_curr_.carried(carry) + right_perturbation_covariance(pair.T_prev_curr, pair.motion_covariance);
+  const Matrix6d cov_pred =
+      extended(carried(cov_kf_curr_, carry), right_perturbation_covariance(pair.T_prev_curr, pair.motion_covariance));
   Measurement z;
   const bool measured = measure(kf, curr, T_pred, z) && agree(T_pred, cov_pred, z);
   if (measured) {
@@ -404,7 +410,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
       Keyframe& old = kept_[static_cast<size_t>(back)];
       const Eigen::Isometry3d T_back = old.pose.inverse() * pose_;
       const Matrix6d carry_back = se3_adjoint(T_back.inverse());
-      const ChainCovariance cov_back = old.pose_covariance.carried(carry_back) + pose_covariance();
+      const Matrix6d cov_back = carried(old.pose_covariance, carry_back) + pose_covariance();
       Measurement zb;
       if (measure(old, curr, T_back, zb) && holds(old, zb.inliers) && agree(T_back, cov_back, zb)) {
         active_ = back;
@@ -422,7 +428,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
     }
   }
   pair.T_prev_curr = orthonormalised(pose_prev.inverse() * pose_);
-  pair.keyframe.pose_covariance = pose_covariance().bound;
+  pair.keyframe.pose_covariance = pose_covariance();
 }
 
 }  // namespace rgbdo

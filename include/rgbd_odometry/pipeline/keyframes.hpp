@@ -70,25 +70,23 @@ class KeyframeTracker {
   void update(const ProcessedFrame& curr, PairResult& pair);
 
  private:
-  // A covariance of a right perturbation along the chain, kept two ways. The pull's prediction
-  // and measurement share errors (every measurement against one keyframe carries that
-  // keyframe's own noise, and the prediction has been pulled towards the earlier ones), by how
-  // much no frame shows:
-  //  - `independent` as if they shared none, (1-g)^2 P + g^2 R: what the gates judge a
-  //    measurement by (the tighter, so the stricter);
-  //  - `bound` whatever they share, (1-g) P + g R (Cov((1-g) a + g b) = (1-g) Cov(a) + g Cov(b)
-  //    - g(1-g) Cov(a-b)): what is reported. The independent one left the chain's pose
-  //    over-confident where the measurement is precise (noisy ICL out and back with averaged
-  //    depth: median pose NEES 10.9, 59 % under the gate).
-  struct ChainCovariance {
-    Matrix6d independent = Matrix6d::Zero();
-    Matrix6d bound = Matrix6d::Zero();
-    ChainCovariance carried(const Matrix6d& adjoint) const {
-      return {adjoint * independent * adjoint.transpose(), adjoint * bound * adjoint.transpose()};
-    }
-    ChainCovariance operator+(const ChainCovariance& o) const { return {independent + o.independent, bound + o.bound}; }
-    ChainCovariance operator+(const Matrix6d& m) const { return {independent + m, bound + m}; }
-  };
+  // The covariance of a right perturbation along the chain: a bound that holds whatever its
+  // errors share, for the pull's prediction and measurement share them by an amount no frame
+  // shows (every measurement against one keyframe carries that keyframe's own noise, the
+  // prediction has been pulled towards the earlier ones, and consecutive frame pairs err alike
+  // while the camera keeps moving one way). Two rules make it one:
+  //  - the pull, (1-g) P + g R (Cov((1-g) a + g b) = (1-g) Cov(a) + g Cov(b) - g(1-g) Cov(a-b));
+  //  - a frame pair's step added to the chain: (1+a) P + (1+1/a) S for any a > 0 bounds
+  //    Cov(e_P + e_S) (the cross term, 2 Cov(e_P, e_S) <= a P + S/a), a = sqrt(tr S / tr P)
+  //    making it the smallest in trace.
+  // The gates judge measurements by it too. Kept as if the errors were independent, the chain
+  // claimed a third of its error along the slide between sideways translation and rotation
+  // (src/pipeline/MEASUREMENTS.md#keyframes: a noisy sway over ICL-NUIM with averaged depth,
+  // 2 mm against a covariance of 0.6), failed the gate on measurements that were right, and
+  // made a keyframe at the wrong pose instead: 2 to 10 keyframes made, 3.6 to 9.4 mm from the
+  // start after 10 sways.
+  static Matrix6d carried(const Matrix6d& chain, const Matrix6d& adjoint) { return adjoint * chain * adjoint.transpose(); }
+  static Matrix6d extended(const Matrix6d& chain, const Matrix6d& step);
   struct Keyframe {
     Features features;
     KeypointGeometry geometry;
@@ -97,7 +95,7 @@ class KeyframeTracker {
     std::vector<Eigen::Vector3d> points;  // anchored_points of its keypoints
     std::vector<int> levels;              // each keypoint's pyramid level
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // in the trajectory's frame
-    ChainCovariance pose_covariance;                         // of its right perturbation
+    Matrix6d pose_covariance = Matrix6d::Zero();             // of its right perturbation
     bool live = false;          // holds a keyframe of the current chain
     int reference_inliers = 0;  // its first measured frame's; 0: none yet
     std::uint64_t id = 0;
@@ -120,15 +118,15 @@ class KeyframeTracker {
   // The two depth maps' alignment, started at out.T, fused into out.
   void refine_with_depth(const Keyframe& kf, const ProcessedFrame& curr, Measurement& out);
   // Whether the measurement agrees with the prediction (chi^2 gate of fuse_estimates).
-  bool agree(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z) const;
+  bool agree(const Eigen::Isometry3d& T_pred, const Matrix6d& cov_pred, const Measurement& z) const;
   // T_kf_curr_ and its covariance: the prediction moved a keyframes.gain share of the way to z.
-  void correct(const Eigen::Isometry3d& T_pred, const ChainCovariance& cov_pred, const Measurement& z);
+  void correct(const Eigen::Isometry3d& T_pred, const Matrix6d& cov_pred, const Measurement& z);
   // Whether a measurement with `inliers` still holds kf.
   bool holds(const Keyframe& kf, int inliers) const;
   // The kept keyframe (not `except`) that sees most of its points in curr from pose_, or -1.
   int most_overlapping(int except) const;
   void make_keyframe(const ProcessedFrame& curr);
-  ChainCovariance pose_covariance() const;  // of pose_'s right perturbation
+  Matrix6d pose_covariance() const;  // of pose_'s right perturbation
 
   PipelineConfig config_;
   SensorNoise noise_;
@@ -145,7 +143,7 @@ class KeyframeTracker {
   int active_ = -1;  // index into kept_; -1: no chain
   std::uint64_t next_id_ = 1, frames_ = 0;
   Eigen::Isometry3d T_kf_curr_ = Eigen::Isometry3d::Identity();  // the last frame in the active keyframe's
-  ChainCovariance cov_kf_curr_;                                   // of its right perturbation
+  Matrix6d cov_kf_curr_ = Matrix6d::Zero();                       // of its right perturbation
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();        // the last frame in the trajectory's frame
   // The current frame's motion, its depths are carried to its colour instant with (null: not).
   MotionPrior own_motion_;

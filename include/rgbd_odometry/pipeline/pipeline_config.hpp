@@ -81,7 +81,7 @@ struct RansacConfig {
 struct RefinementConfig {
   bool enabled = true;
   int stride_px = 8;               // the depth maps sampled every this many pixels
-  bool average_depth = false;      // each sample the mean of the 5x5 pixels around it, where they are one surface
+  bool average_depth = true;       // each sample the mean of the 5x5 pixels around it, where they are one surface
   int iterations = 4;              // Gauss-Newton steps at most
   double max_distance_m = 0.05;    // a point further than this from its associated one is not used
   int min_points = 300;            // fewer associations and the feature motion stands alone
