@@ -80,11 +80,11 @@ class KeyframeTracker {
   //    Cov(e_P + e_S) (the cross term, 2 Cov(e_P, e_S) <= a P + S/a), a = sqrt(tr S / tr P)
   //    making it the smallest in trace.
   // The gates judge measurements by it too. Kept as if the errors were independent, the chain
-  // claimed a third of its error along the slide between sideways translation and rotation
-  // (src/pipeline/MEASUREMENTS.md#keyframes: a noisy sway over ICL-NUIM with averaged depth,
-  // 2 mm against a covariance of 0.6), failed the gate on measurements that were right, and
-  // made a keyframe at the wrong pose instead: 2 to 10 keyframes made, 3.6 to 9.4 mm from the
-  // start after 10 sways.
+  // claimed a third of its error along the slide between sideways translation and rotation (a
+  // noisy sway over ICL-NUIM with averaged depth: 1.6 mm against a sigma of 0.2-0.6), failed the
+  // gate on measurements that were right, and made keyframes at the wrong pose instead (2 to 10
+  // made, up to 9.4 mm from the start after 10 sways; src/pipeline/MEASUREMENTS.md, "The chain's
+  // covariance: a bound whatever its errors share").
   static Matrix6d carried(const Matrix6d& chain, const Matrix6d& adjoint) { return adjoint * chain * adjoint.transpose(); }
   static Matrix6d extended(const Matrix6d& chain, const Matrix6d& step);
   struct Keyframe {
