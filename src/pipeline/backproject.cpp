@@ -10,7 +10,7 @@ namespace rgbdo {
 namespace {
 
 constexpr int kEdgeRadiusPx = 2;  // 5x5: Kinect-v1 depth is block-matched over ~9 px windows
-// PixelUndistorter's grid: nodes this many pixels apart (kernel_test measures what it leaves).
+// PixelUndistorter's grid: nodes this many pixels apart (test_backproject measures what it leaves).
 constexpr int kUndistortGridPx = 4;
 // The lens model's inversion, converged to 0.001 px by 20 steps over TUM fr1's whole image.
 constexpr int kLensInversionSteps = 50;
