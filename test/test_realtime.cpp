@@ -14,6 +14,7 @@
 #include "rgbd_odometry/runtime/realtime.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
 #include "rgbd_odometry/pipeline/keyframes.hpp"
+#include "rgbd_odometry/pipeline/reported_covariance.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/app/config_file.hpp"
@@ -179,6 +180,7 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
   FrameExtractor extractor(config);
   PairEstimator estimator(config);
   KeyframeTracker keyframes(config);
+  ReportedCovariance reported(config.covariance);
   int compared = 0;
   for (const PairOutput& o : live.outputs) {
     if (!o.has_pair) continue;
@@ -188,7 +190,10 @@ void expect_same_as_replay(const Config& config, const LiveRun& live) {
     extractor.extract(recorded_frame(o.t_frame_ns - (a->t_curr_ns - a->t_prev_ns)), prev);
     extractor.extract(recorded_frame(o.t_frame_ns), curr);
     PairResult b = estimator.estimate(prev, curr);
-    if (!PairEstimator::dropped_frame(b)) keyframes.update(curr, b);
+    if (!PairEstimator::dropped_frame(b)) {
+      keyframes.update(curr, b);
+      reported.report(b);
+    }
     EXPECT_EQ(a->t_curr_ns - a->t_prev_ns, b.t_curr_ns - b.t_prev_ns) << "dt, pair " << compared;
     EXPECT_EQ(a->status, b.status) << "pair " << compared;
     EXPECT_EQ(a->inliers, b.inliers) << "pair " << compared;

@@ -8,7 +8,10 @@
 namespace rgbdo {
 
 OdometryPipeline::OdometryPipeline(const PipelineConfig& config)
-    : extractor_(config), estimator_(config), keyframes_(config) {}
+    : extractor_(config),
+      estimator_(config),
+      keyframes_(config),
+      reported_(config.covariance) {}
 
 std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
   const auto start = std::chrono::steady_clock::now();
@@ -20,6 +23,7 @@ std::optional<PairResult> OdometryPipeline::process(const RgbdFrame& frame) {
     result->times.detect_ms = detect_ms;
     if (PairEstimator::dropped_frame(*result)) return result;  // prev_ stays the previous frame
     keyframes_.update(curr_, *result);
+    reported_.report(*result);
   }
   std::swap(prev_, curr_);  // swap, not copy: buffers are reused frame after frame
   have_prev_ = true;

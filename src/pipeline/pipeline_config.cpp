@@ -53,6 +53,8 @@ void add_pipeline_settings(PipelineConfig& c, SettingsTable& table) {
       {"covariance.pixel_sigma_px", "px", "keypoint localisation error at full resolution (integer corners: 1/sqrt(12))", &c.covariance.pixel_sigma_px, 0.0, 100, true},  // 0: singular fit weights
       {"covariance.residual_variance_factor", "", "scale the noise by the fit's a-posteriori variance factor", &c.covariance.residual_variance_factor},
       {"covariance.scale", "", "multiplies the reported covariance; 1: the noise model as it stands", &c.covariance.scale, 1e-6, 1e6},
+      {"covariance.smoothing_s", "s", "the reported covariance is the running log-Euclidean mean of the pairs' rate covariances over this time; 0: each pair's own", &c.covariance.smoothing_s, 0, 3600},
+      {"covariance.smoothing_pass_ratio", "", "where a pair's own covariance is wider than the running mean, it weighs in from sqrt(this) times as wide (variance) and goes out as its own from this; 0: never", &c.covariance.smoothing_pass_ratio, 0, 1e6},
       {"refinement.enabled", "", "refine the feature motion by aligning the two depth maps and fuse the two by information", &c.refinement.enabled},
       {"refinement.stride_px", "px", "the depth maps are sampled every this many pixels for the alignment", &c.refinement.stride_px, 2, 64},
       {"refinement.average_depth", "", "each sample of the depth maps is the mean of the 5x5 pixels around it where they lie on one surface (spanning at most twice depth.edge_max_relative_step); off: its one pixel", &c.refinement.average_depth},

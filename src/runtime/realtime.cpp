@@ -18,6 +18,7 @@
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/pipeline/keyframes.hpp"
+#include "rgbd_odometry/pipeline/reported_covariance.hpp"
 
 namespace rgbdo {
 namespace {
@@ -74,6 +75,7 @@ class Run {
         extractor_(config, pool_.get()),
         estimator_(config),
         keyframes_(config),
+        reported_(config.covariance),
         capture_clock_(config, gyro) {
     check_cpus_allowed(cpus_);
     for (std::size_t i = 0; i < kProcessedSlots; ++i) free_.push(static_cast<int>(i));
@@ -257,6 +259,7 @@ class Run {
       if (!PairEstimator::dropped_frame(out.result)) {
         capture_clock_.stamp(out.result);  // from the frame pair's own rotation, before the keyframe's
         keyframes_.update(curr.frame, out.result);
+        reported_.report(out.result);  // what goes out, after every use of the pair's own
       }
       out.result.times.detect_ms = curr.detect_ms;
     }
@@ -341,6 +344,7 @@ class Run {
   FrameExtractor extractor_;  // the extraction thread's
   PairEstimator estimator_;   // the estimation thread's
   KeyframeTracker keyframes_;  // the estimation thread's
+  ReportedCovariance reported_;  // the estimation thread's
   CaptureClock capture_clock_;  // the estimation thread's: when the frames were taken
   std::array<ProcessedSlot, kProcessedSlots> slots_;
   BoundedQueue<int, kProcessedSlots> free_, ready_;

@@ -2,7 +2,7 @@
 // The fixed pipeline on one thread: feed RGB-D frames in capture order, get one result per
 // consecutive pair. Stages: mask -> detect -> back-project (FrameExtractor, per frame), then
 // match -> point pairs -> RANSAC -> covariance (PairEstimator, per pair), then the keyframe's
-// measurement (KeyframeTracker). The real-time runtime (runtime/realtime.hpp) runs the two
+// measurement (KeyframeTracker) and the covariance that goes out (ReportedCovariance). The real-time runtime (runtime/realtime.hpp) runs the two
 // halves on their own threads instead.
 #include <cstdint>
 #include <optional>
@@ -13,6 +13,7 @@
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/pipeline/keyframes.hpp"
 #include "rgbd_odometry/pipeline/pair_estimator.hpp"
+#include "rgbd_odometry/pipeline/reported_covariance.hpp"
 
 namespace rgbdo {
 
@@ -27,6 +28,7 @@ class OdometryPipeline {
   FrameExtractor extractor_;
   PairEstimator estimator_;
   KeyframeTracker keyframes_;
+  ReportedCovariance reported_;
   ProcessedFrame prev_, curr_;
   bool have_prev_ = false;
 };

@@ -157,6 +157,15 @@ struct CovarianceConfig {
   bool residual_variance_factor = true;
   // Multiplies the covariance before it is reported; 1: the noise model as it stands.
   double scale = 1.0;
+  // What goes out is the running (log-Euclidean) mean of the pairs' rate covariances over this
+  // time, seconds, not each pair's own (pipeline/reported_covariance.hpp); 0: each pair's own.
+  double smoothing_s = 1.0;
+  // ... except where a pair's own is wider in some direction: there it weighs in from
+  // sqrt(this) times as wide (in variance) and goes out as its own from this; 0: never. 25 is
+  // 5x in sigma, own from 5 sigma; it weighs in from 2.2x, beyond the ordinary spread (per axis
+  // the pairs' 90th percentile of sigma lies 1.5-1.9x above its geometric mean on fr1_xyz and
+  // fr3 structure_notexture_far).
+  double smoothing_pass_ratio = 25;
 };
 
 // When the frames were taken, measured against the autopilot's gyro (pipeline/capture_latency.hpp):
