@@ -1,7 +1,6 @@
 #include "rgbd_odometry/pipeline/reported_covariance.hpp"
 
 #include <Eigen/Eigenvalues>
-#include <algorithm>
 #include <cmath>
 
 #include "rgbd_odometry/core/cost_stage.hpp"

@@ -2,8 +2,8 @@
 // The fixed pipeline on one thread: feed RGB-D frames in capture order, get one result per
 // consecutive pair. Stages: mask -> detect -> back-project (FrameExtractor, per frame), then
 // match -> point pairs -> RANSAC -> covariance (PairEstimator, per pair), then the keyframe's
-// measurement (KeyframeTracker) and the covariance that goes out (ReportedCovariance). The real-time runtime (runtime/realtime.hpp) runs the two
-// halves on their own threads instead.
+// measurement (KeyframeTracker) and the covariance that goes out (ReportedCovariance). The
+// real-time runtime (runtime/realtime.hpp) runs the two halves on their own threads instead.
 #include <cstdint>
 #include <optional>
 

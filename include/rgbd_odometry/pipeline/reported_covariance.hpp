@@ -5,16 +5,16 @@
 // From pair to pair the estimated covariance spans 2.5-3.6x in σ (90th over 10th percentile),
 // but only part of that spread is the error's: in the frame a flight controller keeps (its
 // diagonal, in the world) the slope of log |error| on log σ is 0.13-0.75 for the level and
-// about 0 for the shape (bench/MEASUREMENTS.md#inside-a-flight-controllers-filter). A filter weighs each motion by
-// it: weights that vary without the error spoil the equal-weight average over which the
-// consecutive errors partly cancel, and a few pairs that claim a precision they do not have
-// pull its velocity. What goes out is therefore a running mean, over smoothing_s, of the rate
-// covariance (the pair's over dt^2) in the log-Euclidean metric (the matrix logarithm's mean:
-// a geometric mean, which leaves a covariance's consistency as it found it where the
-// arithmetic mean of matrices would inflate it), back at the pair's dt. Where a pair's own
-// covariance is wider than that (too few inliers, features starving), it weighs in from
-// sqrt(pass_ratio) times as wide and goes out as its own from pass_ratio: the mean must not
-// hide a sudden loss.
+// about 0 for the shape (bench/MEASUREMENTS.md#with-keyframes-what-the-filter-integrates). A
+// filter weighs each motion by it: weights that vary without the error spoil the equal-weight
+// average over which the consecutive errors partly cancel, and a few pairs that claim a
+// precision they do not have pull its velocity. What goes out is therefore a running mean,
+// over smoothing_s, of the rate covariance (the pair's over dt^2) in the log-Euclidean metric
+// (the matrix logarithm's mean: a geometric mean, which leaves a covariance's consistency as
+// it found it where the arithmetic mean of matrices would inflate it), back at the pair's dt.
+// Where a pair's own covariance is wider than that (too few inliers, features starving), it
+// weighs in from sqrt(pass_ratio) times as wide and goes out as its own from pass_ratio: the
+// mean must not hide a sudden loss.
 // Measured: src/pipeline/MEASUREMENTS.md#what-goes-out-the-level-over-a-second.
 #include "rgbd_odometry/core/geometry.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
