@@ -309,6 +309,8 @@ TEST(CaptureClock, EachFrameIsRestampedOnceAndThePairsChain) {
   EXPECT_LE(most_step_s, config.latency.max_slew / kFrameHz + 1e-9) << "moved at most max_slew";
   ASSERT_TRUE(clock.colour_latency_sigma_s());
   EXPECT_LT(*clock.colour_latency_sigma_s(), 0.002);
+  EXPECT_EQ(clock.latency_sigmas().applied_s, last->timing.applied_s)
+      << "the covariance's image-shift term is told how far the stamps were moved";
 }
 
 TEST(CaptureClock, WithoutAGyroTheStampsStand) {
@@ -323,6 +325,7 @@ TEST(CaptureClock, WithoutAGyroTheStampsStand) {
   EXPECT_EQ(r.t_curr_ns, before.t_curr_ns);
   EXPECT_FALSE(r.timing.gyro);
   EXPECT_FALSE(clock.colour_latency_sigma_s());
+  EXPECT_EQ(clock.latency_sigmas().applied_s, 0.0);
 }
 
 TEST(CaptureClock, TurnedOffByConfigurationTheGyroIsNotRead) {

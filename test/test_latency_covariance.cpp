@@ -71,6 +71,43 @@ TEST(LatencyCovariance, TheTranslationsOwnInstantEntersTheTranslationAlone) {
   EXPECT_EQ(added.topRightCorner(3, 3).norm(), 0.0);
 }
 
+// The image of a point straight ahead at depth z, the camera moving at `rate` (xi / dt of
+// T_prev_curr): its shift per second in normalised image coordinates, from where the point is
+// seen after a short step (p' = T^-1 p), not from the formula under test.
+Eigen::Vector2d image_shift_rate(const Vector6d& rate, double z) {
+  constexpr double step = 1e-6;
+  const Eigen::Vector3d moved = transform_from_xi(rate * step).inverse() * Eigen::Vector3d(0, 0, z);
+  return Eigen::Vector2d(moved.x() / moved.z(), moved.y() / moved.z()) / step;
+}
+
+TEST(LatencyCovariance, ARestampedPairCarriesItsImageShiftsChangeTimesTheLatencyApplied) {
+  // Stamps moved by L = 14 ms, the image shift not: what the pair is off by is L times the
+  // change of the image's rate, as a rotation of the same image shift (an image shift dx is a
+  // rotation -dx about y, dy one of +dy about x).
+  const double L = 0.014, z = 1.25;
+  const Vector6d before = rate_of(0.1, 0.02, 0, 0.05, 0.2, 0), after = rate_of(0.3, -0.1, 0.05, 0.1, -0.1, 0.02);
+  PairRate prev = precise(before), curr = precise(after);
+  curr.inverse_depth = 1 / z;
+  LatencySigmas s{0, 0, 0};
+  s.restamped_s = L;
+  const Matrix6d c = latency_covariance(s, Matrix6d::Zero(), curr, prev);
+  const Eigen::Vector2d shift = image_shift_rate(after, z) - image_shift_rate(before, z);
+  const Eigen::Vector2d as_rotation(shift.y(), -shift.x());  // (rx, ry)
+  const Eigen::Matrix2d expected = L * L * as_rotation * as_rotation.transpose();
+  EXPECT_LT((c.block<2, 2>(3, 3) - expected).norm(), 1e-3 * expected.norm());
+  Matrix6d elsewhere = c;
+  elsewhere.block<2, 2>(3, 3).setZero();
+  EXPECT_EQ(elsewhere.norm(), 0.0);
+  // A change along the slide (translation and rotation that leave the image where it was)
+  // moves no image: nothing to carry. Nor does a pair whose stamps were not moved.
+  const Vector6d slide = after + rate_of(0.2, 0.1, 0, 0.1 / z, -0.2 / z, 0);
+  EXPECT_LT(latency_covariance(s, Matrix6d::Zero(), PairRate{slide, curr.covariance, curr.dt_s, 1 / z}, PairRate{after, curr.covariance, curr.dt_s, 1 / z})
+                .norm(),
+            1e-12);
+  s.restamped_s = 0;
+  EXPECT_EQ(latency_covariance(s, Matrix6d::Zero(), curr, prev).norm(), 0.0);
+}
+
 TEST(LatencyCovariance, ThePairsOwnNoiseIsNotTakenForAChangeOfRate) {
   // Two pairs at the same rate, each measured with noise C: the difference of their measured
   // rates is noise, var 2 C / dt^2. Plain D D^T would report it as a change; what is kept

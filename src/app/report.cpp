@@ -13,8 +13,10 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-void print_stats(std::ostream& out, const char* name, const ErrorStats& s, double factor, const char* unit) {
-  out << "  " << std::left << std::setw(38) << name << std::right << std::fixed << std::setprecision(3) << "RMSE "
+// digits: a drift of centimetres a second needs four to show a change of a few percent.
+void print_stats(std::ostream& out, const char* name, const ErrorStats& s, double factor, const char* unit,
+                 int digits = 3) {
+  out << "  " << std::left << std::setw(38) << name << std::right << std::fixed << std::setprecision(digits) << "RMSE "
       << s.rmse * factor << "  median " << s.median * factor << "  max " << s.max * factor << " " << unit << "  ("
       << s.count << ")\n";
 }
@@ -150,7 +152,7 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   out << "  accuracy against ground truth (" << s.evaluated << " pairs):\n";
   print_stats(out, "frame-to-frame RPE, translation", s.rpe_translation_m, 1e3, "mm");
   print_stats(out, "frame-to-frame RPE, rotation", s.rpe_rotation_deg, 1.0, "deg");
-  print_stats(out, "drift over 1 s windows, translation", s.drift_translation_mps, 1.0, "m/s");
+  print_stats(out, "drift over 1 s windows, translation", s.drift_translation_mps, 1.0, "m/s", 4);
   print_stats(out, "drift over 1 s windows, rotation", s.drift_rotation_degps, 1.0, "deg/s");
   out << std::setprecision(2) << "  covariance, with the ground truth's noise allowed for (" << s.allowance.translation_m * 1e3
       << " mm, " << std::setprecision(3) << s.allowance.rotation_rad * kRadToDeg << " deg per axis; " << s.allowance.origin << "):\n";

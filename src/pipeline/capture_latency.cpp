@@ -374,11 +374,12 @@ std::optional<double> CaptureClock::colour_latency_sigma_s() const {
 }
 
 MeasuredLatencySigmas CaptureClock::latency_sigmas() const {
-  MeasuredLatencySigmas m{colour_latency_sigma_s(), depth_latency_sigma_s(), std::nullopt};
+  MeasuredLatencySigmas m{colour_latency_sigma_s(), depth_latency_sigma_s(), std::nullopt, feed_ ? applied_s_ : 0.0};
   // The translations come from both streams, from an instant between the colour's and the
-  // depth's, not the rotations' one applied (src/pipeline/MEASUREMENTS.md#known-limit-fast-motion: on fr1_xyz
-  // restamped, pair NEES 6.08 -> 5.33 with it; thinned to every 2nd frame 8.54 -> 7.86, still
-  // above the gate's share).
+  // depth's, not the rotations' one applied (on fr1_xyz restamped, pair NEES 6.08 -> 5.33 with
+  // it; thinned to every 2nd frame 8.54 -> 7.86, still above the gate's share); the image shift
+  // comes from the colour's, not moved with the stamps by applied_s
+  // (src/pipeline/MEASUREMENTS.md#restamped-pairs-and-their-image-shift).
   if (const auto lag = depth_lag_s()) m.translation_s = std::abs(*lag);
   return m;
 }

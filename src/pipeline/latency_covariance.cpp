@@ -18,6 +18,28 @@ Matrix6d change_outer_product(const Vector6d& change, const Matrix6d& noise) {
   return (1.0 - 6.0 / whitened) * change * change.transpose();
 }
 
+// L^2 S S^T in the (rx, ry) block: S the change of the image-shift rate, as rates about x and y
+// (a point ahead at inverse depth w shifts by -(tx w + ry), -(ty w - rx)), its outer product
+// shrunk by the share its noise explains, as change_outer_product does over 2 dimensions.
+Matrix6d image_shift_term(double restamped_s, double inverse_depth, const Vector6d& change, const Matrix6d& noise) {
+  Eigen::Matrix<double, 2, 6> P = Eigen::Matrix<double, 2, 6>::Zero();
+  P(0, 1) = -inverse_depth;
+  P(0, 3) = 1;
+  P(1, 0) = inverse_depth;
+  P(1, 4) = 1;
+  const Eigen::Vector2d s = P * change;
+  const Eigen::Matrix2d n = P * noise * P.transpose();
+  const Eigen::LDLT<Eigen::Matrix2d> ldlt(n);
+  double keep = 1;
+  if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0) {
+    const double whitened = s.dot(ldlt.solve(s));
+    keep = whitened > 2.0 ? 1.0 - 2.0 / whitened : 0.0;
+  }
+  Matrix6d c = Matrix6d::Zero();
+  c.block<2, 2>(3, 3) = restamped_s * restamped_s * keep * s * s.transpose();
+  return c;
+}
+
 // sigma_c^2 M + sigma_d^2 G M G^T + sigma_t^2 M_tt: one outer product of rates through the latencies.
 Matrix6d through_latencies(const LatencySigmas& s, const Matrix6d& depth_response, const Matrix6d& m) {
   Matrix6d c = s.colour_s * s.colour_s * m + s.depth_s * s.depth_s * depth_response * m * depth_response.transpose();
@@ -29,7 +51,8 @@ Matrix6d through_latencies(const LatencySigmas& s, const Matrix6d& depth_respons
 
 Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_response, const PairRate& curr,
                             const std::optional<PairRate>& previous) {
-  if (curr.dt_s <= 0 || (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0))
+  if (curr.dt_s <= 0 ||
+      (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0 && sigmas.restamped_s == 0))
     return Matrix6d::Zero();
   // The change of rate between the pair's two frames, from the two pairs' mean rates (whose
   // midpoints are (dt + dt') / 2 apart), and how much of its outer product is their noise.
@@ -41,6 +64,7 @@ Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_r
     change_noise = stretch * stretch * (change_noise + previous->covariance / (previous->dt_s * previous->dt_s));
   }
   Matrix6d c = through_latencies(sigmas, depth_response, change_outer_product(change, change_noise));
+  if (sigmas.restamped_s != 0) c += image_shift_term(sigmas.restamped_s, curr.inverse_depth, change, change_noise);
   if (sigmas.integration_window_s > 0) {
     const Vector6d& earlier = previous && previous->dt_s > 0 ? previous->rate : curr.rate;
     const Matrix6d rates = curr.rate * curr.rate.transpose() + earlier * earlier.transpose();

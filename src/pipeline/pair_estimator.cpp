@@ -456,7 +456,10 @@ void PairEstimator::fuse_depth_alignment(const ProcessedFrame& prev, const Proce
 }
 
 void PairEstimator::add_latency_terms(double dt_s, Matrix6d& cov) {
-  const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s};  // before the latency terms
+  double inverse_depth = 0;
+  for (const Eigen::Vector3d& p : inlier_prev_) inverse_depth += 1.0 / p.z();
+  if (!inlier_prev_.empty()) inverse_depth /= static_cast<double>(inlier_prev_.size());
+  const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s, inverse_depth};  // before the latency terms
   if (!paper_noise_) {
     const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)
                                                          : Matrix6d::Zero();

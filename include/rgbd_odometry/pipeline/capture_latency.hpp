@@ -129,6 +129,7 @@ class CaptureLatencyEstimator {
 // nullopt where the priors stand.
 struct MeasuredLatencySigmas {
   std::optional<double> colour_s, depth_s, translation_s;
+  double applied_s = 0;  // the latency the stamps are moved by (LatencySigmas::restamped_s)
 };
 
 // The latency applied: each pair stamped at its frames' capture instants. Lives on the

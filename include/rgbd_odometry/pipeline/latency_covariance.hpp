@@ -34,6 +34,16 @@
 // its translations from an instant between the colour's and the depth's: sigma_t (the depth's
 // measured lag behind the colour) enters the translation block alone, D_t the translational
 // part of the change of rate.
+// Nor is its image shift moved with its stamps. The shift of the image (a point ahead at the
+// inliers' mean inverse depth w: tx w + ry and ty w - rx) is what the colour measures most
+// precisely, and it is the colour's own; the tilt rotations the gyro times are where the depth's
+// lag leaks in (above). Against TUM fr1's motion capture the image shift matches best at the
+// stamps and the tilt rotations 14 ms later, which is the latency applied; restamped by it, the
+// pairs' image-shift errors double (src/pipeline/MEASUREMENTS.md#restamped-pairs-and-their-image-shift).
+// Until the colour's own instant is told apart from the leak, a pair restamped by L carries
+//    image shift:  L^2 S S^T   in the (rx, ry) block,
+// S the change of the image-shift rate (as rates about x and y), shrunk as D D^T is. It is 0
+// where nothing is restamped (no gyro, or a sensor on its stamps).
 #include <optional>
 
 #include "rgbd_odometry/pipeline/pipeline_config.hpp"
@@ -46,6 +56,7 @@ struct PairRate {
   Vector6d rate = Vector6d::Zero();          // xi / dt: m/s, then rad/s
   Matrix6d covariance = Matrix6d::Zero();    // of xi, before the latency terms
   double dt_s = 0;
+  double inverse_depth = 0;                  // the inliers' mean 1/Z, 1/m (the image-shift term's w)
 };
 
 struct LatencySigmas {
@@ -55,6 +66,9 @@ struct LatencySigmas {
   // sigma of the translations' instant apart from the rotations' (the translation alone: a
   // pair restamped at its rotations' measured instant, pipeline/capture_latency.hpp; 0 otherwise)
   double translation_s = 0;
+  // The latency the pair's stamps were moved by (pipeline/capture_latency.hpp; 0: none): its
+  // image shift was not moved with them.
+  double restamped_s = 0;
 };
 
 inline LatencySigmas latency_sigmas(const CovarianceConfig& c) {

@@ -44,6 +44,7 @@ class PairEstimator {
     latency_.colour_s = measured.colour_s.value_or(config_.covariance.colour_latency_sigma_s);
     latency_.depth_s = measured.depth_s.value_or(config_.covariance.depth_latency_sigma_s);
     latency_.translation_s = measured.translation_s.value_or(0);
+    latency_.restamped_s = measured.applied_s;
   }
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
