@@ -5,6 +5,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "rgbd_odometry/pipeline/backproject.hpp"
+#include "rgbd_odometry/pipeline/depth_clock.hpp"
 
 namespace rgbdo {
 namespace {
@@ -183,6 +184,87 @@ TEST(BackProject, PairsNeedDepthOnBothSides) {
   build_point_pairs({{0, 0, 0}, {1, 1, 0}}, a, {}, b, {}, nullptr, pairs);
   ASSERT_EQ(pairs.size(), 1u);
   EXPECT_EQ(pairs.match_index[0], 1);
+}
+
+
+// The depth clock (pipeline/depth_clock.hpp). A camera whose velocity along its optical axis
+// is v(t), depth read `lag` before the colour: a pair's z measured between the depth instants,
+// the rest between the colour ones.
+Eigen::Isometry3d turn_and_move(double angle_rad, const Eigen::Vector3d& t) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(angle_rad, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()).toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+TEST(DepthClock, CarriesAMotionAsTheTwoFramesShiftsAlongTheirOwnOpticalAxes) {
+  // Against the composition written out: Tz(-a) M Tz(b).
+  const Eigen::Isometry3d M = turn_and_move(0.2, {0.01, -0.02, 0.03});
+  const double a = 0.004, b = -0.007;
+  const Eigen::Isometry3d expected =
+      Eigen::Translation3d(0, 0, -a) * M * Eigen::Translation3d(0, 0, b);
+  const Eigen::Isometry3d carried = at_colour_instants(M, a, b);
+  EXPECT_LT((carried.matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_TRUE(at_colour_instants(M, 0, 0).isApprox(M, 0));
+}
+
+TEST(DepthClock, TakesTheLagOutOfAChainOfPairsWhoseVelocityChanges) {
+  // Velocity along z held for 6 pairs at a time, then stepped. A step reaches the velocities
+  // the clock averages (the measured ones, lag and all) for 3 pairs; after that every pair's z
+  // comes back as taken between the colour instants, and the chain's error, lag x the change
+  // of velocity, goes with it.
+  const double lag = 0.017, dt = 1.0 / 30;
+  const double segments[] = {0.0, 0.3, -0.2, 0.1};
+  DepthClock clock(lag);
+  double measured_sum = 0, carried_sum = 0, true_sum = 0, v_prev = segments[0];
+  for (double vk : segments) {
+    for (int i = 0; i < 6; ++i) {
+      // The depth instants trail the colour's by lag: z over the pair is off by lag (v_k - v_k-1).
+      const double true_z = vk * dt;
+      const double measured_z = true_z - lag * (vk - v_prev);
+      const Eigen::Isometry3d c = clock.carry(turn_and_move(0.0, {0.002, 0.001, measured_z}), dt, 0.0);
+      EXPECT_DOUBLE_EQ(c.translation().x(), 0.002);  // only the optical axis moves
+      EXPECT_DOUBLE_EQ(c.translation().y(), 0.001);
+      if (i >= 4) {
+        EXPECT_NEAR(c.translation().z(), true_z, 1e-15) << vk << " pair " << i;
+        EXPECT_NEAR(clock.frame_shift_m(), lag * vk, 1e-15);
+      }
+      measured_sum += measured_z;
+      carried_sum += c.translation().z();
+      true_sum += true_z;
+      v_prev = vk;
+    }
+  }
+  // Uncarried the chain is short by lag x (last velocity - first), 1.7 mm; carried, it is not.
+  EXPECT_NEAR(true_sum - measured_sum, lag * 0.1, 1e-15);
+  EXPECT_NEAR(carried_sum, true_sum, 1e-15);
+}
+
+TEST(DepthClock, LeavesTheMotionWithoutALagAfterAGapAndOnTheFirstPair) {
+  const Eigen::Isometry3d M = turn_and_move(0.05, {0.0, 0.0, 0.01});
+  DepthClock off(0.0);
+  EXPECT_TRUE(off.carry(M, 1.0 / 30, 0.0).isApprox(M, 0));
+  EXPECT_TRUE(off.carry(M, 1.0 / 30, 0.013).isApprox(M, 0));  // 0: off, restamped or not
+  DepthClock clock(0.02);
+  // The first pair: the older frame's velocity is unknown, the pair stays as measured.
+  EXPECT_TRUE(clock.carry(M, 1.0 / 30, 0.0).isApprox(M, 0));
+  EXPECT_NEAR(clock.frame_shift_m(), 0.02 * 0.3, 1e-12);
+  clock.forget();
+  EXPECT_EQ(clock.frame_shift_m(), 0.0);
+  EXPECT_TRUE(clock.carry(turn_and_move(0.05, {0.0, 0.0, -0.01}), 1.0 / 30, 0.0)
+                  .isApprox(turn_and_move(0.05, {0.0, 0.0, -0.01}), 0));
+}
+
+TEST(DepthClock, CarriesToThePairsTimesTheLatencyAppliedLess) {
+  // Restamped by 13 ms against a gyro, a 17-ms lag leaves 4 ms to carry.
+  const double dt = 1.0 / 30;
+  DepthClock restamped(0.017), lagging(0.004);
+  const Eigen::Isometry3d a = turn_and_move(0.0, {0, 0, 0.002}), b = turn_and_move(0.0, {0, 0, 0.008});
+  (void)restamped.carry(a, dt, 0.013);
+  (void)lagging.carry(a, dt, 0.0);
+  const Eigen::Isometry3d r = restamped.carry(b, dt, 0.013), l = lagging.carry(b, dt, 0.0);
+  EXPECT_NEAR(r.translation().z(), l.translation().z(), 1e-15);
+  EXPECT_GT(std::abs(r.translation().z() - 0.008), 1e-5);  // it did carry
 }
 
 }  // namespace

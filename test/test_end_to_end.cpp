@@ -69,12 +69,14 @@ TEST(EndToEnd, AccuracyHoldsItsMeasuredLevel) {
   // deg/s; over 1.3 s these frames hold 9 overlapping windows, and their rotation drift rose.)
   // The keyframes (pipeline/keyframes.hpp, gain 0.15) moved them from 4.03 mm / 0.288 deg,
   // 0.0086 m/s / 0.487 deg/s to 4.13 mm / 0.295 deg, 0.0107 m/s / 0.399 deg/s; on all 240
-  // frames 3.86 -> 3.94 mm, 0.018 -> 0.017 m/s, 0.774 -> 0.776 deg/s.
+  // frames 3.86 -> 3.94 mm, 0.018 -> 0.017 m/s, 0.774 -> 0.776 deg/s. The depth's lag carried
+  // out of the optical axis (depth.lag_beyond_stamps_s, below) moved them to 4.09 mm / 0.288 deg,
+  // 0.0087 m/s / 0.394 deg/s (on all 240 frames 3.75 -> 3.81 mm, 0.0168 -> 0.0141 m/s).
   const auto& s = default_replay().summary;
   EXPECT_EQ(s.evaluated, 39);
   EXPECT_LT(s.rpe_translation_m.rmse, 0.00433);
   EXPECT_LT(s.rpe_rotation_deg.rmse, 0.310);
-  EXPECT_LT(s.drift_translation_mps.rmse, 0.0113);
+  EXPECT_LT(s.drift_translation_mps.rmse, 0.0092);
   EXPECT_LT(s.drift_rotation_degps.rmse, 0.419);
 }
 
@@ -98,6 +100,22 @@ TEST(EndToEnd, SubpixelTrackingLowersTheOneSecondDrift) {
   EXPECT_LT(tracked.drift_translation_mps.rmse, 0.78 * corners.drift_translation_mps.rmse);
   EXPECT_LT(tracked.drift_rotation_degps.rmse, 0.75 * corners.drift_rotation_degps.rmse);
   EXPECT_LT(tracked.rpe_translation_m.rmse, 1.01 * corners.rpe_translation_m.rmse);
+}
+
+TEST(EndToEnd, TheDepthsLagCarriedOutOfTheOpticalAxisLowersTheDrift) {
+  // The Kinect's depth is taken ~17 ms before what its stamps say (bench/depth_lag_edges.py):
+  // each pair's motion along the optical axis is measured between the depth instants, and a
+  // chain of them errs by that lag x the change of velocity (pipeline/depth_clock.hpp). Measured
+  // on these frames: 1-s drift 0.0103 -> 0.0087 m/s, pairs 4.02 -> 4.09 mm, rotations unchanged
+  // (0.395 -> 0.394 deg/s). On all 240 frames of fr1_xyz: 0.0168 -> 0.0141 m/s, 3.75 -> 3.81 mm.
+  Config c = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  ASSERT_EQ(c.depth.lag_beyond_stamps_s, 0.017);
+  const auto& carried = default_replay().summary;
+  c.depth.lag_beyond_stamps_s = 0;
+  const auto stamped = replay(c).summary;
+  EXPECT_LT(carried.drift_translation_mps.rmse, 0.90 * stamped.drift_translation_mps.rmse);
+  EXPECT_LT(carried.rpe_translation_m.rmse, 1.03 * stamped.rpe_translation_m.rmse);
+  EXPECT_LT(carried.drift_rotation_degps.rmse, 1.01 * stamped.drift_rotation_degps.rmse);
 }
 
 TEST(EndToEnd, MostPointPairsAreTracked) {

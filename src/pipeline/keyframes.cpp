@@ -10,6 +10,7 @@
 #include "rgbd_odometry/core/clock.hpp"
 #include "rgbd_odometry/core/cost_stage.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
+#include "rgbd_odometry/pipeline/depth_clock.hpp"
 #include "rgbd_odometry/pipeline/grid_orb.hpp"
 
 namespace rgbdo {
@@ -236,13 +237,16 @@ bool KeyframeTracker::measure(const Keyframe& kf, const ProcessedFrame& curr, co
   out.covariance = rigid_fit_covariance(pair_kf_, pair_curr_, fit_.inliers, pair_covariances_, pair_cells_, out.T);
   out.inliers = static_cast<int>(fit_.inliers.size());
   if (!(out.covariance.allFinite() && out.covariance.trace() > 0)) return false;
-  if (!depth_alignable(kf, curr)) return true;
-  // Where the depth is aligned, a keyframe the frame is leaving is not measured: its alignment
-  // would be paid for twice, the switch that follows measuring the frame again; unrefined, its
-  // pull would move the pose further than the alignment lets it err (ICL-NUIM pairs 0.090 ->
-  // 0.145 mm).
-  if (!holds(kf, out.inliers)) return false;
-  refine_with_depth(kf, curr, out);
+  if (depth_alignable(kf, curr)) {
+    // Where the depth is aligned, a keyframe the frame is leaving is not measured: its alignment
+    // would be paid for twice, the switch that follows measuring the frame again; unrefined, its
+    // pull would move the pose further than the alignment lets it err (ICL-NUIM pairs 0.090 ->
+    // 0.145 mm).
+    if (!holds(kf, out.inliers)) return false;
+    refine_with_depth(kf, curr, out);
+  }
+  // Measured between the two frames' depth instants, as the pair was: to their colour instants.
+  out.T = at_colour_instants(out.T, kf.depth_shift_m, curr_depth_shift_m_);
   return true;
 }
 
@@ -331,6 +335,7 @@ void KeyframeTracker::make_keyframe(const ProcessedFrame& curr) {
   kf.points = curr_points_;
   kf.geometry = curr.geometry;
   kf.times = curr.times;
+  kf.depth_shift_m = curr_depth_shift_m_;
   kf.cloud = curr.cloud;
   if (tracking_) curr.gray.copyTo(kf.gray);
   kf.levels.resize(curr.features.keypoints.size());
@@ -366,6 +371,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   ++frames_;
   const double dt_s = static_cast<double>(pair.t_curr_ns - pair.t_prev_ns) * 1e-9;
   own_motion_ = dt_s > 0 ? motion_from(pair.T_prev_curr, dt_s) : MotionPrior{};
+  curr_depth_shift_m_ = pair.depth_shift_m;
   motion_ = config_.depth.compensate_timing && dt_s > 0 ? &own_motion_ : nullptr;
   anchored_points(curr.geometry, curr.times, motion_, config_.camera.fx, config_.camera.fy, curr_points_);
   // The sensor's constants as the pair stage has learnt them, where it has.

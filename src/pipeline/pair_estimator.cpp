@@ -96,6 +96,7 @@ PairEstimator::PairEstimator(const PipelineConfig& config)
       aligner_(config.camera, config.refinement, config.covariance.depth_noise_coeff, config.depth.units_per_m),
       alignment_trust_(config.refinement),
       depth_lag_(config.refinement),
+      depth_clock_(config.depth.lag_beyond_stamps_s),
       depth_noise_(config.covariance.depth_noise_coeff),
       keypoint_sigma_(config.covariance.pixel_sigma_px, config.features.orb_scale_factor, config.features.orb_levels,
                       config.features.max_features),
@@ -327,6 +328,7 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
     r.status = s;
     last_pair_.reset();  // a gap: the old velocity says nothing about the next pair
     last_feature_pair_.reset();
+    depth_clock_.forget();
     return r;
   };
   // The newer frame's problem is the news; the older one's was reported with its own pair.
@@ -367,7 +369,8 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.status = Status::Ok;
   r.inliers = static_cast<int>(fit_.inliers.size());
   r.inlier_threshold_m = fit_.threshold_m;
-  r.T_prev_curr = fit_.T_prev_curr;
+  r.T_prev_curr = depth_clock_.carry(fit_.T_prev_curr, dt_s, latency_.restamped_s);
+  r.depth_shift_m = depth_clock_.frame_shift_m();
   r.covariance = cov;
   return r;
 }

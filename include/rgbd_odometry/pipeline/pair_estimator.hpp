@@ -15,6 +15,7 @@
 #include "rgbd_odometry/pipeline/capture_latency.hpp"
 #include "rgbd_odometry/pipeline/covariance.hpp"
 #include "rgbd_odometry/pipeline/depth_alignment.hpp"
+#include "rgbd_odometry/pipeline/depth_clock.hpp"
 #include "rgbd_odometry/pipeline/keypoint_sigma.hpp"
 #include "rgbd_odometry/pipeline/frame_extractor.hpp"
 #include "rgbd_odometry/pipeline/latency_covariance.hpp"
@@ -51,6 +52,7 @@ class PairEstimator {
   void forget_motion() {
     last_pair_.reset();
     last_feature_pair_.reset();
+    depth_clock_.forget();
   }
 
  private:
@@ -123,6 +125,7 @@ class PairEstimator {
   DepthAlignment alignment_;
   AlignmentTrust alignment_trust_;
   DepthLagEstimate depth_lag_;
+  DepthClock depth_clock_;  // the motion along the optical axis carried to the colour's instants
   DepthNoiseEstimate depth_noise_;
   KeypointSigmaEstimate keypoint_sigma_;
   std::vector<Match> matches_;
