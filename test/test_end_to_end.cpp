@@ -387,6 +387,48 @@ TEST(HardFrames, TheCovarianceGrowsWhenTheFramesGetWorse) {
   }
 }
 
+TEST(EndToEnd, AFrameWithoutDepthIsBridgedByTheNextPair) {
+  // A frame without depth after a good one is dropped untouched: the next frame pairs with the
+  // good one and gets exactly what a run without the depthless frame gets. A run of them longer
+  // than PairEstimator::kMaxBridgedGapNs fails as any unusable frame does, and tracking resumes.
+  const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
+  const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);
+  const auto real = [&](size_t i) { return load_tum_frame(seq.frames[i], 5000, 640, 480); };
+  const auto without_depth = [&](size_t i) {
+    TumFrameRef ref = seq.frames[i];
+    ref.t_depth_ns.reset();  // none within 20 ms
+    return load_tum_frame(ref, 5000, 640, 480);
+  };
+  OdometryPipeline bridged(config), skipped(config);
+  for (size_t i : {0, 1}) {
+    (void)bridged.process(real(i));
+    (void)skipped.process(real(i));
+  }
+  const auto dropped = bridged.process(without_depth(2));
+  ASSERT_TRUE(dropped);
+  EXPECT_EQ(dropped->status, Status::NoDepth);
+  EXPECT_TRUE(PairEstimator::dropped_frame(*dropped));
+  const auto across = bridged.process(real(3));
+  const auto expected = skipped.process(real(3));
+  ASSERT_EQ(across->status, Status::Ok);
+  EXPECT_EQ(across->t_prev_ns, seq.frames[1].t_colour_ns);
+  EXPECT_EQ(across->inliers, expected->inliers);
+  EXPECT_TRUE(across->T_prev_curr.isApprox(expected->T_prev_curr, 0));
+
+  // Frames 4.. without depth: dropped while within 200 ms of frame 3, failed after.
+  OdometryPipeline pipeline(config);
+  for (size_t i : {0, 1, 2, 3}) (void)pipeline.process(real(i));
+  size_t i = 4;
+  for (; seq.frames[i].t_colour_ns - seq.frames[3].t_colour_ns <= PairEstimator::kMaxBridgedGapNs; ++i)
+    EXPECT_TRUE(PairEstimator::dropped_frame(*pipeline.process(without_depth(i)))) << i;
+  EXPECT_GE(i, 9u);  // 30 frames a second
+  const auto failed = pipeline.process(without_depth(i));
+  EXPECT_EQ(failed->status, Status::NoDepth);
+  EXPECT_FALSE(PairEstimator::dropped_frame(*failed));
+  EXPECT_EQ(pipeline.process(real(i + 1))->status, Status::NoDepth);  // its predecessor had none
+  EXPECT_EQ(pipeline.process(real(i + 2))->status, Status::Ok);
+}
+
 TEST(EndToEnd, TexturelessAndDepthlessFramesFailCleanlyAndTrackingResumes) {
   const Config config = load_config(RGBDO_CONFIG_DIR "/tum-fr1.yaml");
   const TumSequence seq = open_tum_sequence(RGBDO_TEST_DATA_DIR);

@@ -121,20 +121,29 @@ LiveRun run_live(const Config& config, const std::string& uri) {
 bool flagged_without_depth(std::int64_t t_colour_ns, std::int64_t t_depth_ns) { return t_depth_ns == t_colour_ns; }
 bool flagged_without_depth(const PairOutput& o) { return flagged_without_depth(o.t_frame_ns, o.t_depth_ns); }
 
-// Every pair solves, except those with a frame the reader flagged NoDepth: those are flagged
-// NoDepth too, and rare even under load (at most a quarter of the frames).
+// Every pair solves, except those whose newer frame the reader flagged NoDepth: those are
+// dropped (flagged NoDepth), the next frame paired across them, and rare even under load (at
+// most a quarter of the frames). Only a first frame without depth, or one too long after the
+// last good frame, is kept, and fails the pair after it.
 void expect_solved_unless_depth_came_late(const LiveRun& live) {
-  size_t late = 0;
-  bool previous_late = false;
+  size_t late = 0, bridged = 0;
+  bool kept_late = false;  // the frame the next pairs with has no depth
   for (const PairOutput& o : live.outputs) {
     const bool this_late = flagged_without_depth(o);
     late += this_late;
-    if (o.has_pair) {
-      EXPECT_EQ(o.result.status, this_late || previous_late ? Status::NoDepth : Status::Ok) << o.frame_problem;
+    if (!o.has_pair) {
+      kept_late = this_late;
+      continue;
     }
-    previous_late = this_late;
+    const bool dropped = this_late && !kept_late &&
+                         o.result.t_curr_ns - o.result.t_prev_ns <= PairEstimator::kMaxBridgedGapNs;
+    bridged += dropped;
+    EXPECT_EQ(o.result.status, this_late || kept_late ? Status::NoDepth : Status::Ok) << o.frame_problem;
+    EXPECT_EQ(PairEstimator::dropped_frame(o.result), dropped) << o.frame_problem;
+    if (!dropped) kept_late = this_late;
   }
   EXPECT_LE(late, live.outputs.size() / 4) << "frames flagged NoDepth";
+  EXPECT_EQ(live.stats.bridged_without_depth, bridged);
 }
 
 // Replays, from the recording on disk, exactly the frame pairs the live run formed, in the same

@@ -107,7 +107,8 @@ void print_summary(std::ostream& out, const AccuracySummary& s, bool with_ground
   out << "  frames: " << run.frames << " processed, " << run.skipped << " skipped (processing behind), "
       << run.without_depth << " without a depth frame within 20 ms, " << run.dropped_by_sensor
       << " dropped by the sensor, " << run.stamp_not_increasing
-      << " dropped for a capture time not after the previous frame's; sensor lost " << run.sensor_losses
+      << " dropped for a capture time not after the previous frame's, " << run.bridged_without_depth
+      << " without depth bridged (the next frame paired with the one before); sensor lost " << run.sensor_losses
       << " times, re-opened " << run.reopens << " times\n";
   if (run.latency.count() > 0)
     out << std::fixed << std::setprecision(2) << "  latency capture to output: median " << run.latency.quantile_ms(0.5)

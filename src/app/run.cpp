@@ -175,10 +175,13 @@ class FrameOutputs {
     }
     const PairResult& r = item.result;
     if (PairEstimator::dropped_frame(r)) {
-      // Logged and said, nothing else: no pose, no message, no evaluation over no time.
+      // Logged and said, nothing else: no pose, no message, no evaluation; the next pair carries
+      // whatever motion there was.
       for (const auto& sink : sinks_) sink->dropped(item);
-      err_ << "rgbd-odometry: frame at " << format_seconds(item.t_frame_host_ns())
-           << " dropped: its capture time is not after the previous frame's\n";
+      err_ << "rgbd-odometry: frame at " << format_seconds(item.t_frame_host_ns()) << " dropped: "
+           << (r.status == Status::StampNotIncreasing ? "its capture time is not after the previous frame's"
+                                                      : "no depth; the next frame pairs with the one before it")
+           << "\n";
       return;
     }
     if (r.status == Status::Ok) integrator_.add(r.T_prev_curr);

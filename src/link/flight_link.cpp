@@ -113,7 +113,7 @@ void FlightLink::send_message(const Message& message) {
 }
 
 void FlightLink::send_pair(const PairResult& pair) {
-  if (pair.status == Status::StampNotIncreasing) return;  // a dropped frame: nothing happened
+  if (pair.frame_dropped) return;  // a dropped frame: the next pair carries the motion
   if (pair.status == Status::SensorLost) builder_.note_sensor_reset();
   if (!builder_.has_pose() && pair.status == Status::Ok) level_local_frame();
   builder_.add(pair);

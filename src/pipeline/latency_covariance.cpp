@@ -5,22 +5,24 @@
 namespace rgbdo {
 namespace {
 
-// The outer product of the true change of rate, from a measured change D ~ N(change, V): D D^T
-// shrunk by (1 - 6 / D^T V^-1 D), floored at 0. E[D^T V^-1 D] = 6 + the true change's own
+// The outer product of a true change from a measured one, D ~ N(change, V), in N dimensions:
+// D D^T shrunk by (1 - N / D^T V^-1 D), floored at 0. E[D^T V^-1 D] = N + the true change's own
 // (whitened) square, so the factor keeps about that share; a change lost in the noise gives
 // nothing, one far above it nearly all of D D^T. (D D^T - V would be unbiased but is not a
-// covariance: its other five directions are negative.)
-Matrix6d change_outer_product(const Vector6d& change, const Matrix6d& noise) {
-  const Eigen::LDLT<Matrix6d> ldlt(noise);
+// covariance: its other directions are negative.)
+template <int N>
+Eigen::Matrix<double, N, N> shrunk_outer_product(const Eigen::Matrix<double, N, 1>& change,
+                                                 const Eigen::Matrix<double, N, N>& noise) {
+  const Eigen::LDLT<Eigen::Matrix<double, N, N>> ldlt(noise);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) return change * change.transpose();
   const double whitened = change.dot(ldlt.solve(change));
-  if (!(whitened > 6.0)) return Matrix6d::Zero();
-  return (1.0 - 6.0 / whitened) * change * change.transpose();
+  if (!(whitened > N)) return Eigen::Matrix<double, N, N>::Zero();
+  return (1.0 - N / whitened) * change * change.transpose();
 }
 
 // L^2 S S^T in the (rx, ry) block: S the change of the image-shift rate, as rates about x and y
 // (a point ahead at inverse depth w shifts by -(tx w + ry), -(ty w - rx)), its outer product
-// shrunk by the share its noise explains, as change_outer_product does over 2 dimensions.
+// shrunk by the share its noise explains, as the change of rate's is.
 Matrix6d image_shift_term(double restamped_s, double inverse_depth, const Vector6d& change, const Matrix6d& noise) {
   Eigen::Matrix<double, 2, 6> P = Eigen::Matrix<double, 2, 6>::Zero();
   P(0, 1) = -inverse_depth;
@@ -29,14 +31,8 @@ Matrix6d image_shift_term(double restamped_s, double inverse_depth, const Vector
   P(1, 4) = 1;
   const Eigen::Vector2d s = P * change;
   const Eigen::Matrix2d n = P * noise * P.transpose();
-  const Eigen::LDLT<Eigen::Matrix2d> ldlt(n);
-  double keep = 1;
-  if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0) {
-    const double whitened = s.dot(ldlt.solve(s));
-    keep = whitened > 2.0 ? 1.0 - 2.0 / whitened : 0.0;
-  }
   Matrix6d c = Matrix6d::Zero();
-  c.block<2, 2>(3, 3) = restamped_s * restamped_s * keep * s * s.transpose();
+  c.block<2, 2>(3, 3) = restamped_s * restamped_s * shrunk_outer_product<2>(s, n);
   return c;
 }
 
@@ -63,7 +59,7 @@ Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_r
     change = stretch * (curr.rate - previous->rate);
     change_noise = stretch * stretch * (change_noise + previous->covariance / (previous->dt_s * previous->dt_s));
   }
-  Matrix6d c = through_latencies(sigmas, depth_response, change_outer_product(change, change_noise));
+  Matrix6d c = through_latencies(sigmas, depth_response, shrunk_outer_product<6>(change, change_noise));
   if (sigmas.restamped_s != 0) c += image_shift_term(sigmas.restamped_s, curr.inverse_depth, change, change_noise);
   if (sigmas.integration_window_s > 0) {
     const Vector6d& earlier = previous && previous->dt_s > 0 ? previous->rate : curr.rate;

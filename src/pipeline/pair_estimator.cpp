@@ -322,6 +322,17 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
     // Before any other verdict: the frame is dropped whatever its content, and the
     // estimator's state (the last velocity) stays that of the previous frame's pair.
     r.status = Status::StampNotIncreasing;
+    r.frame_dropped = true;
+    return r;
+  }
+  if (curr.status == Status::NoDepth && prev.status == Status::Ok && r.t_curr_ns - r.t_prev_ns <= kMaxBridgedGapNs) {
+    // A colour frame without its depth (none within 20 ms, or an empty image: the sensor's
+    // hiccup) is dropped and the next frame pairs with this one's predecessor, as a live reader
+    // that gives such a frame up does. Failed, it cost two pairs, the motion over both and the
+    // keyframe chain (the textureless TUM fr3 head, 3 such frames: 1-s drift 0.0287 -> 0.0186 m/s
+    // bridged; src/pipeline/MEASUREMENTS.md).
+    r.status = Status::NoDepth;
+    r.frame_dropped = true;
     return r;
   }
   const auto fail = [&](Status s) {
@@ -459,9 +470,12 @@ void PairEstimator::fuse_depth_alignment(const ProcessedFrame& prev, const Proce
 }
 
 void PairEstimator::add_latency_terms(double dt_s, Matrix6d& cov) {
+  // The inliers' mean inverse depth, which only a restamped pair's image-shift term uses.
   double inverse_depth = 0;
-  for (const Eigen::Vector3d& p : inlier_prev_) inverse_depth += 1.0 / p.z();
-  if (!inlier_prev_.empty()) inverse_depth /= static_cast<double>(inlier_prev_.size());
+  if (latency_.restamped_s != 0 && !inlier_prev_.empty()) {
+    for (const Eigen::Vector3d& p : inlier_prev_) inverse_depth += 1.0 / p.z();
+    inverse_depth /= static_cast<double>(inlier_prev_.size());
+  }
   const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s, inverse_depth};  // before the latency terms
   if (!paper_noise_) {
     const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)

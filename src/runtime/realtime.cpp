@@ -283,7 +283,8 @@ class Run {
       if (item) {
         ++stats_.frames;
         if (item->has_pair && PairEstimator::dropped_frame(item->result)) {
-          ++stats_.stamp_not_increasing;
+          ++(item->result.status == Status::StampNotIncreasing ? stats_.stamp_not_increasing
+                                                               : stats_.bridged_without_depth);
         } else if (item->has_pair) {
           ++stats_.pairs;
           item->latency_ms = static_cast<double>(steady_now_ns() - item->t_capture_host_ns) * 1e-6;

@@ -24,7 +24,8 @@ class OdometrySink {
     (void)item;
     (void)pose;
   }
-  // A frame dropped for a capture time not after the previous frame's: no pose, no interval.
+  // A dropped frame (PairEstimator::dropped_frame: a capture time not after the previous
+  // frame's, or no depth, bridged): no pose; the next pair spans it.
   virtual void dropped(const PairOutput& item) { (void)item; }
   // The index-th pair, good or failed, and the integrated pose after it.
   virtual void pair(const PairOutput& item, std::size_t index, const Eigen::Isometry3d& pose) = 0;

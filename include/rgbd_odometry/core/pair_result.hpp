@@ -42,6 +42,9 @@ struct PairResult {
   std::int64_t t_prev_ns = 0;
   std::int64_t t_curr_ns = 0;
   Status status = Status::Ok;
+  // The newer frame was dropped (status says why: StampNotIncreasing, or NoDepth bridged): no
+  // motion, nothing sent; the next frame pairs with the older one.
+  bool frame_dropped = false;
   int features_prev = 0, features_curr = 0;
   int matches = 0;      // symmetric ratio-test matches
   bool rematched = false;  // the windowed search fell short; matched again over the whole image

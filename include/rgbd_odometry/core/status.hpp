@@ -8,7 +8,8 @@ namespace rgbdo {
 enum class Status {
   Ok,
   BadFrame,           // the colour or depth image could not be read or has the wrong size
-  NoDepth,            // no depth image was associated with the colour frame
+  NoDepth,            // no depth image was associated with the colour frame (a frame after a
+                      // good one is dropped and bridged: PairEstimator::estimate)
   TooFewFeatures,     // detector found fewer keypoints than a pose needs (no texture)
   TooFewMatches,      // the symmetric ratio test kept fewer matches than a pose needs
   DegenerateSample,   // every RANSAC sample was collinear or violated rigidity

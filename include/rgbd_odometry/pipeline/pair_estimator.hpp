@@ -32,10 +32,16 @@ class PairEstimator {
 
   // The pair's random streams are seeded from the two frames' content and config.seed: the
   // same two frames give the same result in any run, at any place in it.
-  // Status::StampNotIncreasing when curr was captured no later than prev: the caller drops
-  // curr and pairs the next frame with prev (dropped_frame() says so).
+  // The caller drops curr and pairs the next frame with prev (dropped_frame() says so) when curr
+  // was captured no later than prev (Status::StampNotIncreasing), or has no depth (NoDepth) while
+  // prev is good and at most kMaxBridgedGapNs before it: the motion is carried across the frame
+  // without depth by the next pair, nothing is lost, and the estimator's state is untouched.
   [[nodiscard]] PairResult estimate(const ProcessedFrame& prev, const ProcessedFrame& curr);
-  static bool dropped_frame(const PairResult& r) { return r.status == Status::StampNotIncreasing; }
+  static bool dropped_frame(const PairResult& r) { return r.frame_dropped; }
+  // How far a frame without depth may be from the last good one and still be bridged. Beyond
+  // it the last velocity predicts little, and the flight controller is told tracking is lost
+  // (failed pairs) rather than hear nothing.
+  static constexpr std::int64_t kMaxBridgedGapNs = 200'000'000;
 
   // The streams' latencies, where they are measured against the autopilot's gyro
   // (pipeline/capture_latency.hpp): what is left of each replaces covariance.colour_latency_sigma_s

@@ -33,6 +33,7 @@ struct RealtimeStats {
   int sensor_losses = 0, reopens = 0;
   int dropped_by_sensor = 0;   // from the sensor's frame indices
   std::uint64_t stamp_not_increasing = 0;  // frames dropped: captured no later than the previous one
+  std::uint64_t bridged_without_depth = 0;  // frames without depth dropped, the next paired across them
   LatencyHistogram latency;    // of pairs
   // Empty unless a thread failed (an exception): "<thread> thread: <what>". The run then
   // stopped as at a stop request; what was finished before was output.
