@@ -136,10 +136,11 @@ TEST(FlightLinkDecoded, OverAPseudoTerminalEveryFrameDecodesAndMatchesTheLog) {
 }
 
 // `recording` replayed with the shipped fr1 configuration over real UDP to the independent
-// decoder, which writes dir/decoded.jsonl; the log is dir/odometry.csv, the summary in out.
-void replay_over_udp(const fs::path& recording, const fs::path& dir, std::string& out) {
+// decoder, which writes dir/decoded.jsonl (`messages` ODOMETRY expected); the log is
+// dir/odometry.csv, the summary in out.
+void replay_over_udp(const fs::path& recording, const fs::path& dir, std::string& out, int messages = kPairs) {
   const pid_t decoder = start_decoder({"--udp", "0", "--ready-file", (dir / "ready").string(), "--count",
-                                       std::to_string(kPairs), "--timeout-ms", "10000", "--out",
+                                       std::to_string(messages), "--timeout-ms", "10000", "--out",
                                        (dir / "decoded.jsonl").string()},
                                       -1);
   const std::string ready = wait_for_ready(dir / "ready");
@@ -186,6 +187,49 @@ TEST(FlightLinkDecoded, AFrameListedTwiceIsFlaggedAndNeverSent) {
   EXPECT_NE(out.find("1 dropped for a capture time not after the previous frame's"), std::string::npos) << out;
   std::string report;
   EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
+}
+
+// GIVEN a recording whose 10th frame has an empty depth image, WHEN replayed over UDP, THEN
+// that frame is logged as no_depth and dropped, never sent, and the next pair spans it: 38 ok
+// pairs, 38 ODOMETRY messages, no reset (check.mjs recomputes every message from the log).
+TEST(FlightLinkDecoded, AFrameWithoutDepthIsBridgedNotSent) {
+  const ScratchDir scratch_dir = scratch("depthless");
+  const fs::path& dir = scratch_dir.path();
+  const fs::path recording = dir / "recording";
+  fs::create_directories(recording / "depth");
+  for (const char* item : {"rgb", "rgb.txt", "groundtruth.txt"})
+    fs::create_symlink(fs::path(RGBDO_TEST_DATA_DIR) / item, recording / item);
+  {
+    std::ifstream in(fs::path(RGBDO_TEST_DATA_DIR) / "depth.txt");
+    std::ofstream out(recording / "depth.txt");
+    int frame = 0;
+    for (std::string line; std::getline(in, line);) {
+      std::istringstream fields(line);
+      std::string stamp, file;
+      if (line.empty() || line[0] == '#' || !(fields >> stamp >> file)) {
+        out << line << "\n";
+        continue;
+      }
+      const fs::path to = recording / file;
+      if (++frame == 10)
+        cv::imwrite(to.string(), cv::Mat(480, 640, CV_16UC1, cv::Scalar::all(0)));
+      else
+        fs::create_symlink(fs::path(RGBDO_TEST_DATA_DIR) / file, to);
+      out << line << "\n";
+    }
+  }
+  std::string out;
+  ASSERT_NO_FATAL_FAILURE(replay_over_udp(recording, dir, out, kPairs - 1));
+  std::ifstream log(dir / "odometry.csv");
+  int rows = 0, flagged = 0;
+  for (std::string line; std::getline(log, line); ++rows) flagged += line.find(",no_depth,") != std::string::npos;
+  EXPECT_EQ(rows, kPairs + 1) << "the header, 38 pairs and the dropped frame";
+  EXPECT_EQ(flagged, 1);
+  EXPECT_NE(out.find("38 pairs, 38 ok, 0 failed"), std::string::npos) << out;
+  EXPECT_NE(out.find("1 without depth bridged"), std::string::npos) << out;
+  std::string report;
+  EXPECT_EQ(check(dir / "decoded.jsonl", dir / "odometry.csv", report), 0) << report;
+  EXPECT_NE(report.find("\"odometry\":38"), std::string::npos) << report;
 }
 
 // GIVEN a recording whose colour goes black for 10 frames (a lens covered, a light failing),

@@ -361,9 +361,11 @@ function main() {
     }
   }
   if (heartbeats < opt.minHeartbeats) fail('stream', `${heartbeats} HEARTBEAT message(s), expected at least ${opt.minHeartbeats}`);
-  // A frame whose stamp does not follow the previous one is logged and never sent.
+  // A dropped frame is logged and never sent: one whose stamp does not follow the previous one,
+  // and one without depth that the next pair bridges (it starts where the dropped row started).
   const loggedRows = rows.length;
-  rows = rows.filter((r) => r.status !== 'stamp_not_increasing');
+  const bridged = (r, k) => r.status === 'no_depth' && k + 1 < rows.length && rows[k + 1].tPrevStr === r.tPrevStr;
+  rows = rows.filter((r, k) => r.status !== 'stamp_not_increasing' && !bridged(r, k));
   if (opt.vpdOnly ? odo.length !== 0 : odo.length !== rows.length) fail('stream', `${odo.length} ODOMETRY message(s) for ${rows.length} sent log row(s) (${loggedRows} logged)`);
 
   // ---- the odometry, row by row ----
