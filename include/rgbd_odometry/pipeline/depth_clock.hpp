@@ -1,8 +1,8 @@
 #pragma once
 // The depth frames' lag beyond their stamps, taken out of the motion along the optical axis.
 //
-// A keypoint's depth is read from a depth frame captured `lag` after (or, negative, before)
-// what the stamps say relative to its colour frame. Depth is what places the points along the
+// A keypoint's depth is read from a depth frame captured `lag` earlier (negative: later) than
+// the stamps say relative to its colour frame. Depth is what places the points along the
 // optical axis, so a pair's translation along it is measured between the two depth instants
 // while the rest of its motion is measured between the colour ones: its z is off by
 // lag × (the camera's velocity along z at the newer frame − at the older one). Over a chain of

@@ -35,8 +35,8 @@ struct DepthConfig {
   // occlusion edges by bench/depth_lag_edges.py.
   double registration_x_px = 0.0;
   double registration_y_px = 0.0;
-  // How much later than its stamps say, relative to its colour frame, a depth frame is taken
-  // (seconds; negative: earlier): the optical axis's share of the motion is carried to the
+  // How much earlier than its stamps say, relative to its colour frame, a depth frame is taken
+  // (its lag, seconds; negative: later): the optical axis's share of the motion is carried to the
   // colour's instants by it (pipeline/depth_clock.hpp). Read from a recording's occlusion edges
   // by bench/depth_lag_edges.py (its age less what the stamps show; TUM fr1's Kinect: 17 ms).
   double lag_beyond_stamps_s = 0.0;
