@@ -197,15 +197,18 @@ Eigen::Isometry3d turn_and_move(double angle_rad, const Eigen::Vector3d& t) {
   return T;
 }
 
+Eigen::Isometry3d along_z(double s) { return Eigen::Isometry3d(Eigen::Translation3d(0, 0, s)); }
+
 TEST(DepthClock, CarriesAMotionAsTheTwoFramesShiftsAlongTheirOwnOpticalAxes) {
   // Against the composition written out: Tz(-a) M Tz(b).
   const Eigen::Isometry3d M = turn_and_move(0.2, {0.01, -0.02, 0.03});
   const double a = 0.004, b = -0.007;
   const Eigen::Isometry3d expected =
       Eigen::Translation3d(0, 0, -a) * M * Eigen::Translation3d(0, 0, b);
-  const Eigen::Isometry3d carried = at_colour_instants(M, a, b);
+  const Eigen::Isometry3d carried = at_colour_instants(M, along_z(a), along_z(b));
   EXPECT_LT((carried.matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-15);
-  EXPECT_TRUE(at_colour_instants(M, 0, 0).isApprox(M, 0));
+  const Eigen::Isometry3d none = Eigen::Isometry3d::Identity();
+  EXPECT_TRUE(at_colour_instants(M, none, none).isApprox(M, 1e-15));
 }
 
 TEST(DepthClock, TakesTheLagOutOfAChainOfPairsWhoseVelocityChanges) {
@@ -227,7 +230,8 @@ TEST(DepthClock, TakesTheLagOutOfAChainOfPairsWhoseVelocityChanges) {
       EXPECT_DOUBLE_EQ(c.translation().y(), 0.001);
       if (i >= 4) {
         EXPECT_NEAR(c.translation().z(), true_z, 1e-15) << vk << " pair " << i;
-        EXPECT_NEAR(clock.frame_shift_m(), lag * vk, 1e-15);
+        EXPECT_NEAR(clock.frame_shift().translation().z(), lag * vk, 1e-15);
+        EXPECT_TRUE(clock.frame_shift().linear().isIdentity(0));  // no tilt lag: no turn
       }
       measured_sum += measured_z;
       carried_sum += c.translation().z();
@@ -248,9 +252,9 @@ TEST(DepthClock, LeavesTheMotionWithoutALagAfterAGapAndOnTheFirstPair) {
   DepthClock clock(0.02);
   // The first pair: the older frame's velocity is unknown, the pair stays as measured.
   EXPECT_TRUE(clock.carry(M, 1.0 / 30, 0.0).isApprox(M, 0));
-  EXPECT_NEAR(clock.frame_shift_m(), 0.02 * 0.3, 1e-12);
+  EXPECT_NEAR(clock.frame_shift().translation().z(), 0.02 * 0.3, 1e-12);
   clock.forget();
-  EXPECT_EQ(clock.frame_shift_m(), 0.0);
+  EXPECT_TRUE(clock.frame_shift().isApprox(Eigen::Isometry3d::Identity(), 0));
   EXPECT_TRUE(clock.carry(turn_and_move(0.05, {0.0, 0.0, -0.01}), 1.0 / 30, 0.0)
                   .isApprox(turn_and_move(0.05, {0.0, 0.0, -0.01}), 0));
 }
@@ -265,6 +269,89 @@ TEST(DepthClock, CarriesToThePairsTimesTheLatencyAppliedLess) {
   const Eigen::Isometry3d r = restamped.carry(b, dt, 0.013), l = lagging.carry(b, dt, 0.0);
   EXPECT_NEAR(r.translation().z(), l.translation().z(), 1e-15);
   EXPECT_GT(std::abs(r.translation().z() - 0.008), 1e-5);  // it did carry
+}
+
+TEST(DepthClock, CarriesTheTiltAlongTheSlideOutOfAChainWhoseTurningRateChanges) {
+  // Turning about the image's x axis at a rate held for 6 pairs, then stepped. The tilt is
+  // measured at instants `tilt` earlier than the stamps while the image shift (rx - w ty, a point
+  // ahead at inverse depth w) is the colour's own, on the stamps: a pair errs along the slide by
+  // tilt x the change of rate, in rx and in ty = rx / w. Carried, the chain comes back as between
+  // the stamps; every pair keeps its image shift; z and the turn about the optical axis stay.
+  const double tilt = 0.007, dt = 1.0 / 30, w = 1 / 1.25;
+  const double segments[] = {0.0, 0.6, -0.4, 0.2};  // rad/s
+  DepthClock clock(0.0, tilt);
+  Eigen::Isometry3d measured_chain = Eigen::Isometry3d::Identity(), carried_chain = measured_chain,
+                    true_chain = measured_chain;
+  double w_prev = segments[0];
+  const auto pair = [&](double angle, double ty) {
+    Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+    m.linear() = (Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(0.001, Eigen::Vector3d::UnitZ()))
+                     .toRotationMatrix();
+    m.translation() = Eigen::Vector3d(0.002, ty, 0.004);
+    return m;
+  };
+  const auto rx = [](const Eigen::Isometry3d& m) {
+    const Eigen::AngleAxisd turn(m.linear());
+    return (turn.angle() * turn.axis()).eval();
+  };
+  for (double wk : segments) {
+    for (int i = 0; i < 6; ++i) {
+      const double slide_error = tilt * (wk - w_prev);
+      const Eigen::Isometry3d truth = pair(wk * dt, 0.3 * wk * dt);
+      const Eigen::Isometry3d m = pair(wk * dt - slide_error, 0.3 * wk * dt - slide_error / w);
+      const Eigen::Isometry3d c = clock.carry(m, dt, 0.0, false, w);
+      // Kept or left alone to first order: composing the frames' finite shifts (up to 5 mm and
+      // 4 mrad) with the pair's turn moves them by up to 0.08 mm and 0.012 mrad, where carrying
+      // the tilt alone would move the image shift by up to 7 mrad.
+      EXPECT_NEAR(rx(c).x() - w * c.translation().y(), rx(m).x() - w * m.translation().y(), 3e-5);
+      EXPECT_NEAR(rx(c).z(), 0.001, 1e-5);
+      EXPECT_NEAR(c.translation().z(), 0.004, 1.5e-4);
+      if (i >= 4) {  // the step has left the 3 rates averaged: the pair is as between the stamps
+        EXPECT_NEAR(rx(c).x(), wk * dt, 1e-5) << wk << " pair " << i;
+        EXPECT_NEAR(c.translation().y(), truth.translation().y(), 1.5e-4);
+      }
+      measured_chain = measured_chain * m;
+      carried_chain = carried_chain * c;
+      true_chain = true_chain * truth;
+      w_prev = wk;
+    }
+  }
+  // Uncarried, the chain's turn errs by tilt x (last rate - first) = 1.4 mrad; carried, by the
+  // second-order terms of composing small turns. (Its translation, which the chain's turn mixes
+  // with these first-order errors, is checked pair by pair above.)
+  EXPECT_NEAR(rx(true_chain).x() - rx(measured_chain).x(), tilt * 0.2, 2e-5);
+  EXPECT_NEAR(rx(carried_chain).x(), rx(true_chain).x(), 2e-5);
+}
+
+TEST(DepthClock, CarriesNoTiltWithoutTheInliersDepth) {
+  // Without the depth the image shift cannot be kept: the tilt stays as measured.
+  DepthClock clock(0.0, 0.007);
+  Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+  for (double angle : {0.001, 0.02}) {
+    m.linear() = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    EXPECT_TRUE(clock.carry(m, 1.0 / 30, 0.0, false, 0.0).isApprox(m, 1e-15));
+  }
+}
+
+TEST(DepthClock, WhereAGyroTimesTheRotationsNoTiltIsCarried) {
+  // The gyro restamps the pairs at the rotations' own instants: carried as well, a tilt would be
+  // moved twice. The optical axis's lag is still carried, less what the restamp applied.
+  const double dt = 1.0 / 30;
+  const auto turning = [](double angle, double z) {
+    Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+    m.linear() = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    m.translation() = Eigen::Vector3d(0, 0, z);
+    return m;
+  };
+  DepthClock timed(0.017, 0.010), untimed(0.017, 0.010), depth_only(0.017, 0.0);
+  for (double angle : {0.002, 0.010}) {
+    const Eigen::Isometry3d m = turning(angle, 0.01 * angle);
+    const Eigen::Isometry3d t = timed.carry(m, dt, 0.013, true, 0.8), d = depth_only.carry(m, dt, 0.013, false, 0.8);
+    EXPECT_TRUE(t.isApprox(d, 1e-15));
+    (void)untimed.carry(m, dt, 0.013, false, 0.8);
+  }
+  EXPECT_LT(Eigen::AngleAxisd(timed.frame_shift().linear()).angle(), 1e-15);
+  EXPECT_GT(Eigen::AngleAxisd(untimed.frame_shift().linear()).angle(), 1e-4);  // untimed, it is carried
 }
 
 }  // namespace

@@ -374,7 +374,8 @@ std::optional<double> CaptureClock::colour_latency_sigma_s() const {
 }
 
 MeasuredLatencySigmas CaptureClock::latency_sigmas() const {
-  MeasuredLatencySigmas m{colour_latency_sigma_s(), depth_latency_sigma_s(), std::nullopt, feed_ ? applied_s_ : 0.0};
+  MeasuredLatencySigmas m{colour_latency_sigma_s(), depth_latency_sigma_s(), std::nullopt, feed_ ? applied_s_ : 0.0,
+                          feed_ != nullptr};
   // The translations come from both streams, from an instant between the colour's and the
   // depth's, not the rotations' one applied (on fr1_xyz restamped, pair NEES 6.08 -> 5.33 with
   // it; thinned to every 2nd frame 8.54 -> 7.86, still above the gate's share); the image shift

@@ -2,35 +2,46 @@
 
 namespace rgbdo {
 
-Eigen::Isometry3d at_colour_instants(const Eigen::Isometry3d& measured, double shift_a_m, double shift_b_m) {
-  if (shift_a_m == 0 && shift_b_m == 0) return measured;
-  Eigen::Isometry3d out = measured;
-  // Tz(-s_a) · M · Tz(s_b): the rotation stays, the translation moves by -s_a z_a + R s_b z_b.
-  out.translation() += shift_b_m * measured.linear().col(2) - shift_a_m * Eigen::Vector3d::UnitZ();
-  return out;
+Eigen::Isometry3d at_colour_instants(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& shift_a,
+                                     const Eigen::Isometry3d& shift_b) {
+  return shift_a.inverse() * measured * shift_b;
 }
 
-Eigen::Isometry3d DepthClock::carry(const Eigen::Isometry3d& measured, double dt_s, double restamped_s) {
-  if (lag_s_ == 0 || !(dt_s > 0)) return measured;
-  const double lag_s = lag_s_ - restamped_s;
-  velocity_z_[static_cast<size_t>(next_)] = measured.translation().z() / dt_s;
+Eigen::Isometry3d DepthClock::carry(const Eigen::Isometry3d& measured, double dt_s, double restamped_s,
+                                    bool rotations_timed, double inverse_depth) {
+  if ((lag_s_ == 0 && tilt_lag_s_ == 0) || !(dt_s > 0)) return measured;
+  const double lag_s = lag_s_ == 0 ? 0.0 : lag_s_ - restamped_s;
+  // Where a gyro times the rotations (capture_latency.hpp), their instants are its business: the
+  // pairs are restamped at them once it has converged, and until then the latency priors cover
+  // them. Carried as well, a tilt would be moved twice.
+  const double tilt_lag_s = rotations_timed || !(inverse_depth > 0) ? 0.0 : tilt_lag_s_;
+  const Eigen::AngleAxisd turn(measured.linear());
+  const Eigen::Vector3d rotation = turn.angle() * turn.axis();
+  rates_[static_cast<size_t>(next_)] = Eigen::Vector3d(measured.translation().z(), rotation.x(), rotation.y()) / dt_s;
   next_ = (next_ + 1) % kVelocityPairs;
   if (count_ < kVelocityPairs) ++count_;
-  double mean = 0;
-  for (int i = 0; i < count_; ++i) mean += velocity_z_[static_cast<size_t>(i)];
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i = 0; i < count_; ++i) mean += rates_[static_cast<size_t>(i)];
   mean /= count_;
-  const double prev_shift = shift_m_;
-  shift_m_ = lag_s * mean;
-  // The first pair after a gap: the older frame's velocity is unknown; the pair is left as
+  const Eigen::Isometry3d prev_shift = shift_;
+  shift_.setIdentity();
+  const Eigen::Vector3d tilt(tilt_lag_s * mean(1), tilt_lag_s * mean(2), 0);
+  if (tilt.norm() > 0) shift_.linear() = Eigen::AngleAxisd(tilt.norm(), tilt.normalized()).toRotationMatrix();
+  // The image shift of a point ahead at the inliers' mean depth (tx w + ry, ty w - rx) is the
+  // colour's own and on its stamps: the tilt is carried along the slide, the sideways
+  // translation taking the opposite share.
+  const double depth = tilt_lag_s != 0 ? 1.0 / inverse_depth : 0.0;
+  shift_.translation() = Eigen::Vector3d(-depth * tilt.y(), depth * tilt.x(), lag_s * mean(0));
+  // The first pair after a gap: the older frame's rate is unknown; the pair is left as
   // measured, and the newer frame's shift starts the chain.
   if (count_ == 1) return measured;
-  return at_colour_instants(measured, prev_shift, shift_m_);
+  return at_colour_instants(measured, prev_shift, shift_);
 }
 
 void DepthClock::forget() {
   count_ = 0;
   next_ = 0;
-  shift_m_ = 0;
+  shift_.setIdentity();
 }
 
 }  // namespace rgbdo

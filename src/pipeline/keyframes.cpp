@@ -246,7 +246,7 @@ bool KeyframeTracker::measure(const Keyframe& kf, const ProcessedFrame& curr, co
     refine_with_depth(kf, curr, out);
   }
   // Measured between the two frames' depth instants, as the pair was: to their colour instants.
-  out.T = at_colour_instants(out.T, kf.depth_shift_m, curr_depth_shift_m_);
+  out.T = at_colour_instants(out.T, kf.depth_shift, curr_depth_shift_);
   return true;
 }
 
@@ -335,7 +335,7 @@ void KeyframeTracker::make_keyframe(const ProcessedFrame& curr) {
   kf.points = curr_points_;
   kf.geometry = curr.geometry;
   kf.times = curr.times;
-  kf.depth_shift_m = curr_depth_shift_m_;
+  kf.depth_shift = curr_depth_shift_;
   kf.cloud = curr.cloud;
   if (tracking_) curr.gray.copyTo(kf.gray);
   kf.levels.resize(curr.features.keypoints.size());
@@ -371,7 +371,7 @@ void KeyframeTracker::update(const ProcessedFrame& curr, PairResult& pair) {
   ++frames_;
   const double dt_s = static_cast<double>(pair.t_curr_ns - pair.t_prev_ns) * 1e-9;
   own_motion_ = dt_s > 0 ? motion_from(pair.T_prev_curr, dt_s) : MotionPrior{};
-  curr_depth_shift_m_ = pair.depth_shift_m;
+  curr_depth_shift_ = pair.depth_shift;
   motion_ = config_.depth.compensate_timing && dt_s > 0 ? &own_motion_ : nullptr;
   anchored_points(curr.geometry, curr.times, motion_, config_.camera.fx, config_.camera.fy, curr_points_);
   // The sensor's constants as the pair stage has learnt them, where it has.

@@ -20,6 +20,14 @@ using Clock = std::chrono::steady_clock;
 // 99 % point) teaches the learnt sensor constants nothing: see PairEstimator::estimate.
 constexpr double kChi2_6_99 = 16.81;
 
+// The points' mean 1/Z: the depth of the image shift both the depth clock and the latency
+// terms keep (0 without points).
+double mean_inverse_depth(const std::vector<Eigen::Vector3d>& points) {
+  double sum = 0;
+  for (const Eigen::Vector3d& p : points) sum += 1.0 / p.z();
+  return points.empty() ? 0.0 : sum / static_cast<double>(points.size());
+}
+
 MotionPrior motion_of(const PairRate& pair) {
   MotionPrior m;
   m.velocity_mps = pair.rate.head<3>();
@@ -96,7 +104,7 @@ PairEstimator::PairEstimator(const PipelineConfig& config)
       aligner_(config.camera, config.refinement, config.covariance.depth_noise_coeff, config.depth.units_per_m),
       alignment_trust_(config.refinement),
       depth_lag_(config.refinement),
-      depth_clock_(config.depth.lag_beyond_stamps_s),
+      depth_clock_(config.depth.lag_beyond_stamps_s, config.depth.tilt_lag_beyond_stamps_s),
       depth_noise_(config.covariance.depth_noise_coeff),
       keypoint_sigma_(config.covariance.pixel_sigma_px, config.features.orb_scale_factor, config.features.orb_levels,
                       config.features.max_features),
@@ -380,8 +388,9 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.status = Status::Ok;
   r.inliers = static_cast<int>(fit_.inliers.size());
   r.inlier_threshold_m = fit_.threshold_m;
-  r.T_prev_curr = depth_clock_.carry(fit_.T_prev_curr, dt_s, latency_.restamped_s);
-  r.depth_shift_m = depth_clock_.frame_shift_m();
+  r.T_prev_curr =
+      depth_clock_.carry(fit_.T_prev_curr, dt_s, latency_.restamped_s, rotations_timed_, mean_inverse_depth(inlier_curr_));
+  r.depth_shift = depth_clock_.frame_shift();
   r.covariance = cov;
   return r;
 }
@@ -471,11 +480,7 @@ void PairEstimator::fuse_depth_alignment(const ProcessedFrame& prev, const Proce
 
 void PairEstimator::add_latency_terms(double dt_s, Matrix6d& cov) {
   // The inliers' mean inverse depth, which only a restamped pair's image-shift term uses.
-  double inverse_depth = 0;
-  if (latency_.restamped_s != 0 && !inlier_prev_.empty()) {
-    for (const Eigen::Vector3d& p : inlier_prev_) inverse_depth += 1.0 / p.z();
-    inverse_depth /= static_cast<double>(inlier_prev_.size());
-  }
+  const double inverse_depth = latency_.restamped_s != 0 ? mean_inverse_depth(inlier_prev_) : 0.0;
   const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s, inverse_depth};  // before the latency terms
   if (!paper_noise_) {
     const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)

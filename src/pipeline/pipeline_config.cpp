@@ -27,6 +27,7 @@ void add_pipeline_settings(PipelineConfig& c, SettingsTable& table) {
       {"depth.registration_x_px", "px", "the depth image's misregistration against the colour along x: what the colour shows at u is in the depth at u - this (bench/depth_lag_edges.py measures it)", &c.depth.registration_x_px, -50, 50},
       {"depth.registration_y_px", "px", "the same along y", &c.depth.registration_y_px, -50, 50},
       {"depth.lag_beyond_stamps_s", "s", "how much earlier than its stamps say (relative to its colour frame) a depth frame is taken: the motion along the optical axis is carried to the colour's instants by it (bench/depth_lag_edges.py measures it: its age less what the stamps show)", &c.depth.lag_beyond_stamps_s, -0.1, 0.1},
+      {"depth.tilt_lag_beyond_stamps_s", "s", "how much earlier than the stamps the tilt rotations (about the image's x and y axes) are measured, the depth's lag leaking into them through the slide: each frame's tilt is carried to the stamps by it, its image shift kept; not where a gyro times the rotations", &c.depth.tilt_lag_beyond_stamps_s, -0.1, 0.1},
       {"features.detector", "", "GRID_ORB (ours) or an OpenCV detector by name: ORB, AKAZE, BRISK, SIFT, KAZE, FAST, GFTT, AGAST", &c.features.detector},
       {"features.descriptor", "", "GRID_ORB (with its detector) or an OpenCV descriptor: ORB, AKAZE, BRISK, SIFT, KAZE", &c.features.descriptor},
       {"features.max_features", "", "keypoints per frame", &c.features.max_features, 10, 100000},

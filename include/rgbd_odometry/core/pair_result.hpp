@@ -64,7 +64,7 @@ struct PairResult {
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
   // The newer frame's depth-instant shift along its optical axis (pipeline/depth_clock.hpp): the
   // keyframes carry their measurements of it to the colour's instants as the pair was.
-  double depth_shift_m = 0;
+  Eigen::Isometry3d depth_shift = Eigen::Isometry3d::Identity();
   KeyframeLink keyframe;
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
   // The same before the capture latencies' terms: the error of the motion between the two

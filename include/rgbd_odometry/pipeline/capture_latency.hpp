@@ -130,6 +130,7 @@ class CaptureLatencyEstimator {
 struct MeasuredLatencySigmas {
   std::optional<double> colour_s, depth_s, translation_s;
   double applied_s = 0;  // the latency the stamps are moved by (LatencySigmas::restamped_s)
+  bool gyro = false;     // a gyro times the rotations (the depth clock carries no tilt lag)
 };
 
 // The latency applied: each pair stamped at its frames' capture instants. Lives on the

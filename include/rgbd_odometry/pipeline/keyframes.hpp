@@ -101,7 +101,7 @@ class KeyframeTracker {
     std::uint64_t id = 0;
     std::uint64_t last_used = 0;
     FrameTimes times;  // its capture times (the depth alignment needs colour and depth together)
-    double depth_shift_m = 0;  // its depth-instant shift (PairResult::depth_shift_m)
+    Eigen::Isometry3d depth_shift = Eigen::Isometry3d::Identity();  // PairResult::depth_shift
   };
   struct Measurement {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  // curr in the keyframe's frame
@@ -148,7 +148,7 @@ class KeyframeTracker {
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();        // the last frame in the trajectory's frame
   // The current frame's motion, its depths are carried to its colour instant with (null: not).
   MotionPrior own_motion_;
-  double curr_depth_shift_m_ = 0;  // the current frame's (PairResult::depth_shift_m)
+  Eigen::Isometry3d curr_depth_shift_ = Eigen::Isometry3d::Identity();  // the current frame's (PairResult::depth_shift)
   const MotionPrior* motion_ = nullptr;
   // Per-frame scratch, sized once.
   std::vector<Eigen::Vector3d> curr_points_;

@@ -52,6 +52,7 @@ class PairEstimator {
     latency_.depth_s = measured.depth_s.value_or(config_.covariance.depth_latency_sigma_s);
     latency_.translation_s = measured.translation_s.value_or(0);
     latency_.restamped_s = measured.applied_s;
+    rotations_timed_ = measured.gyro;
   }
 
   // A gap in the frames (sensor lost): the last pair's velocity no longer predicts the next.
@@ -131,7 +132,8 @@ class PairEstimator {
   DepthAlignment alignment_;
   AlignmentTrust alignment_trust_;
   DepthLagEstimate depth_lag_;
-  DepthClock depth_clock_;  // the motion along the optical axis carried to the colour's instants
+  DepthClock depth_clock_;  // the depth's lag carried out of the motion (optical axis, tilt)
+  bool rotations_timed_ = false;  // a gyro times the rotations (set_latency_sigmas)
   DepthNoiseEstimate depth_noise_;
   KeypointSigmaEstimate keypoint_sigma_;
   std::vector<Match> matches_;

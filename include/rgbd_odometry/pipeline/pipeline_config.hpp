@@ -40,6 +40,11 @@ struct DepthConfig {
   // colour's instants by it (pipeline/depth_clock.hpp). Read from a recording's occlusion edges
   // by bench/depth_lag_edges.py (its age less what the stamps show; TUM fr1's Kinect: 17 ms).
   double lag_beyond_stamps_s = 0.0;
+  // How much earlier than the stamps the tilt rotations (about the image's x and y axes) are
+  // measured, the depth's lag leaking into them through the slide: each frame's tilt is carried
+  // by this × its turning rate, its image shift kept (pipeline/depth_clock.hpp). Not carried
+  // where a gyro times the rotations. TUM fr1's Kinect: 13 ms measured, 7 carried.
+  double tilt_lag_beyond_stamps_s = 0.0;
 };
 
 // What features.detector and features.descriptor may name: the project's own extractor
