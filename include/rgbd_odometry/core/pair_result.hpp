@@ -62,8 +62,9 @@ struct PairResult {
   Eigen::Vector3d depth_rotation = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   std::int64_t t_depth_prev_ns = 0, t_depth_curr_ns = 0;
   Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();  // curr camera pose in prev camera frame
-  // The newer frame's depth-instant shift along its optical axis (pipeline/depth_clock.hpp): the
-  // keyframes carry their measurements of it to the colour's instants as the pair was.
+  // The newer frame's depth-instant shift (pipeline/depth_clock.hpp: along its optical axis, and
+  // its tilt along the slide): the keyframes carry their measurements of it to the colour's
+  // instants as the pair was.
   Eigen::Isometry3d depth_shift = Eigen::Isometry3d::Identity();
   KeyframeLink keyframe;
   Matrix6d covariance = Matrix6d::Constant(std::numeric_limits<double>::quiet_NaN());  // of xi = (t, rotvec)
