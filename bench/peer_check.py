@@ -88,14 +88,14 @@ def parts(mean_squares):
     return tuple(math.sqrt(max(float(np.sum(mean_squares[axes])), 0.0)) for axes in (slice(0, 3), slice(3, 6)))
 
 
-def bootstrap_sd(ours_gt, peer_gt, resamples=400):
-    """Each part's sampling error (sd over resamplings of the pairs, a fixed seed): on a few dozen
-    pairs, where the ground truth's own error dwarfs ours along a direction, an estimate of
-    our own part moves by more than itself from one draw of the pairs to the next."""
+def own_part_sd(ours_gt, peer_gt, resamples=400):
+    """Our own part's sampling error (its sd over resamplings of the pairs, a fixed seed): on a
+    few dozen pairs, where the ground truth's own error dwarfs ours along a direction, its
+    estimate moves by more than itself from one draw of the pairs to the next."""
     rng = np.random.default_rng(1)
     n = len(ours_gt)
-    draws = [three_cornered_hat(ours_gt[idx], peer_gt[idx]) for idx in (rng.integers(0, n, n) for _ in range(resamples))]
-    return tuple(np.std([d[part] for d in draws], axis=0) for part in range(3))
+    return np.std([three_cornered_hat(ours_gt[idx], peer_gt[idx])[1]
+                   for idx in (rng.integers(0, n, n) for _ in range(resamples))], axis=0)
 
 
 def exceeding(ours, sd):
@@ -108,7 +108,7 @@ def analyse(log_path, evaluation_path, peer_path):
     e_peer = e_ours - (xi - peer)  # the program wrote e_ours = xi - xi_gt
     per_axis = three_cornered_hat(e_ours, e_peer)
     white_ours, white_peer = whitened(e_ours, cov), whitened(e_peer, cov)
-    along = three_cornered_hat(white_ours, white_peer) + (bootstrap_sd(white_ours, white_peer)[1],)
+    along = three_cornered_hat(white_ours, white_peer) + (own_part_sd(white_ours, white_peer),)
     summed_ours, summed_peer = window_sums(stamps, e_ours), window_sums(stamps, e_peer)
     windowed = three_cornered_hat(summed_ours, summed_peer) if len(summed_ours) else None
     drifts = tuple(parts(np.mean(x * x, axis=0)) + (len(x),) if len(x) else (math.nan, math.nan, 0)
