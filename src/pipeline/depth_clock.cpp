@@ -1,5 +1,7 @@
 #include "rgbd_odometry/pipeline/depth_clock.hpp"
 
+#include "rgbd_odometry/core/geometry.hpp"
+
 namespace rgbdo {
 
 Eigen::Isometry3d at_colour_instants(const Eigen::Isometry3d& measured, const Eigen::Isometry3d& shift_a,
@@ -15,8 +17,7 @@ Eigen::Isometry3d DepthClock::carry(const Eigen::Isometry3d& measured, double dt
   // pairs are restamped at them once it has converged, and until then the latency priors cover
   // them. Carried as well, a tilt would be moved twice.
   const double tilt_lag_s = rotations_timed || !(inverse_depth > 0) ? 0.0 : tilt_lag_s_;
-  const Eigen::AngleAxisd turn(measured.linear());
-  const Eigen::Vector3d rotation = turn.angle() * turn.axis();
+  const Eigen::Vector3d rotation = rotation_vector(measured.linear());
   rates_[static_cast<size_t>(next_)] = Eigen::Vector3d(measured.translation().z(), rotation.x(), rotation.y()) / dt_s;
   next_ = (next_ + 1) % kVelocityPairs;
   if (count_ < kVelocityPairs) ++count_;
@@ -26,7 +27,7 @@ Eigen::Isometry3d DepthClock::carry(const Eigen::Isometry3d& measured, double dt
   const Eigen::Isometry3d prev_shift = shift_;
   shift_.setIdentity();
   const Eigen::Vector3d tilt(tilt_lag_s * mean(1), tilt_lag_s * mean(2), 0);
-  if (tilt.norm() > 0) shift_.linear() = Eigen::AngleAxisd(tilt.norm(), tilt.normalized()).toRotationMatrix();
+  shift_.linear() = rotation_from_vector(tilt);
   // The image shift of a point ahead at the inliers' mean depth (tx w + ry, ty w - rx) is the
   // colour's own and on its stamps: the tilt is carried along the slide, the sideways
   // translation taking the opposite share.

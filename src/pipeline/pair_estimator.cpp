@@ -388,8 +388,9 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.status = Status::Ok;
   r.inliers = static_cast<int>(fit_.inliers.size());
   r.inlier_threshold_m = fit_.threshold_m;
-  r.T_prev_curr =
-      depth_clock_.carry(fit_.T_prev_curr, dt_s, latency_.restamped_s, rotations_timed_, mean_inverse_depth(inlier_curr_));
+  // The inliers' depth only where a tilt is carried (depth.tilt_lag_beyond_stamps_s).
+  const double inverse_depth = config_.depth.tilt_lag_beyond_stamps_s != 0 ? mean_inverse_depth(inlier_curr_) : 0.0;
+  r.T_prev_curr = depth_clock_.carry(fit_.T_prev_curr, dt_s, latency_.restamped_s, rotations_timed_, inverse_depth);
   r.depth_shift = depth_clock_.frame_shift();
   r.covariance = cov;
   return r;
