@@ -1,7 +1,7 @@
 #pragma once
 // What the link tests share to run the independent MAVLink programs of test/mavlink_check
-// (Node.js, node-mavlink): a scratch directory per test, and a node process started with an
-// inherited descriptor as its fd 3.
+// (Node.js, node-mavlink): a node process started with an inherited descriptor as its fd 3, and
+// the scratch directory its files go to (scratch_dir.hpp).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,28 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "scratch_dir.hpp"
+
 namespace rgbdo {
-
-// An empty directory under the system's temporary one, unique to this process, removed when
-// the test that made it passed (kept, with the decoder's files, when it failed).
-class ScratchDir {
- public:
-  ScratchDir(const std::string& prefix, const std::string& name)
-      : path_(std::filesystem::temp_directory_path() / (prefix + "_" + name + "_" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ignored;
-    if (!::testing::Test::HasFailure()) std::filesystem::remove_all(path_, ignored);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 // Starts `node DIR/script args...`; `inherit_fd` (if >= 0) becomes its fd 3. Returns its pid.
 inline pid_t start_node(const std::string& dir, const std::string& script, const std::vector<std::string>& args,

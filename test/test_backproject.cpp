@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <utility>
 #include <opencv2/calib3d.hpp>
 
 #include "rgbd_odometry/pipeline/backproject.hpp"
@@ -321,6 +323,61 @@ TEST(DepthClock, CarriesTheTiltAlongTheSlideOutOfAChainWhoseTurningRateChanges) 
   // with these first-order errors, is checked pair by pair above.)
   EXPECT_NEAR(rx(true_chain).x() - rx(measured_chain).x(), tilt * 0.2, 2e-5);
   EXPECT_NEAR(rx(carried_chain).x(), rx(true_chain).x(), 2e-5);
+}
+
+TEST(DepthClock, RetimesTheImageShiftToThePairsTimesByInterpolatingTheChain) {
+  // A camera swaying sideways while it turns about the image's y axis. Its pairs' rotations are
+  // timed at the pair's times, R before the stamps (as a gyro times them), while their image
+  // shift (tx w + ry, a point ahead at inverse depth w) is the colour's own and on the stamps.
+  // Retimed by R, each pair's sideways translation comes back as over the pair's times to
+  // within the interpolation's third-order error; the rotation is left exactly as measured;
+  // and the chain's image shift telescopes to the frames at its ends.
+  const double R = 0.014, dt = 1.0 / 30, w = 1 / 1.25;
+  const auto x = [](double t) { return 0.1 * std::sin(2 * M_PI * 0.7 * t); };            // m
+  const auto yaw = [](double t) { return 0.03 * std::sin(2 * M_PI * 0.45 * t + 1); };    // rad
+  const auto motion = [](double tx, double ry) {
+    Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+    m.linear() = Eigen::AngleAxisd(ry, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    m.translation() = Eigen::Vector3d(tx, 0, 0.001);
+    return m;
+  };
+  DepthClock clock(0.0, 0.0);
+  double worst_measured = 0, worst_carried = 0, carried_sum = 0;
+  const int pairs = 60;
+  for (int k = 1; k <= pairs; ++k) {
+    const double a = k * dt - dt, b = k * dt;  // stamps
+    const double ry = yaw(b - R) - yaw(a - R);
+    const double shift = w * (x(b) - x(a)) + (yaw(b) - yaw(a));
+    const Eigen::Isometry3d measured = motion((shift - ry) / w, ry);
+    const Eigen::Isometry3d c = clock.carry(measured, dt, R, true, w, R);
+    EXPECT_TRUE(c.linear().isApprox(measured.linear(), 1e-15)) << "pair " << k;
+    const double truth = x(b - R) - x(a - R);
+    if (k == 1) {
+      EXPECT_TRUE(c.isApprox(measured, 0)) << "the first pair: the older frame's motion is unknown";
+      continue;
+    }
+    worst_measured = std::max(worst_measured, std::abs(measured.translation().x() - truth));
+    worst_carried = std::max(worst_carried, std::abs(c.translation().x() - truth));
+    carried_sum += c.translation().x();
+  }
+  EXPECT_GT(worst_measured, 5e-4);  // R x the change of the image shift's rate: up to 0.9 mm
+  EXPECT_LT(worst_carried, worst_measured / 20);
+  // Summed from pair 2 on, the measured chain from frame 1 to the last, each end read R earlier
+  // by linear interpolation of the measured image shift over its frame's pair (the rest telescopes).
+  const auto measured_x = [&](int k) {  // pair k's measured tx and its image shift / w
+    const double a = k * dt - dt, b = k * dt;
+    const double ry = yaw(b - R) - yaw(a - R), shift = w * (x(b) - x(a)) + (yaw(b) - yaw(a));
+    return std::pair<double, double>((shift - ry) / w, shift / w);
+  };
+  double measured_sum = 0;
+  for (int k = 2; k <= pairs; ++k) measured_sum += measured_x(k).first;
+  const double alpha = R / dt;
+  EXPECT_NEAR(carried_sum, measured_sum - alpha * measured_x(pairs).second + alpha * measured_x(1).second, 2e-6);
+  // No depth: nothing can be retimed.
+  DepthClock without(0.0, 0.0);
+  const Eigen::Isometry3d m = motion(0.01, 0.002);
+  (void)without.carry(m, dt, R, true, 0.0, R);
+  EXPECT_TRUE(without.carry(m, dt, R, true, 0.0, R).isApprox(m, 0));
 }
 
 TEST(DepthClock, CarriesNoTiltWithoutTheInliersDepth) {

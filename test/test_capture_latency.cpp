@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -313,6 +314,43 @@ TEST(CaptureClock, EachFrameIsRestampedOnceAndThePairsChain) {
       << "the covariance's image-shift term is told how far the stamps were moved";
 }
 
+// The tilt rotations the gyro times are half the colour's image shift and half the depth's
+// slide: with the depth's own latency measured too, the colour image's is 2 L - L_d, and the
+// image shift is moved the latency applied less that.
+double image_shift_retime(double depth_latency_s, std::optional<double>* before_depth = nullptr) {
+  Vehicle v;
+  v.latency_s = 0.013;
+  VectorGyro gyro(v.gyro(9.5, 21));
+  Config config;
+  CaptureClock clock(config, &gyro);
+  double applied = 0;
+  for (double t = 10; t + 1 / kFrameHz < 20; t += 1 / kFrameHz) {
+    PairResult r = solved_pair(v, t);
+    // The depth frames carry the colour's stamps, their rotation taken depth_latency_s before.
+    const double early = depth_latency_s - v.latency_s;
+    r.depth_rotation = v.pair_rotation(t - early, t - early + 1 / kFrameHz);
+    r.t_depth_prev_ns = r.t_prev_ns;
+    r.t_depth_curr_ns = r.t_curr_ns;
+    if (before_depth && t == 10) *before_depth = clock.latency_sigmas().image_shift_retime_s;
+    clock.stamp(r);
+    applied = r.timing.applied_s;
+    EXPECT_EQ(r.timing.image_shift_known, clock.image_shift_retime_s().has_value());
+  }
+  const MeasuredLatencySigmas m = clock.latency_sigmas();
+  EXPECT_TRUE(m.image_shift_retime_s);
+  EXPECT_LT(m.image_shift_retime_sigma_s, 0.0035);  // 3.0 ms here: twice the colour's, and the depth's
+  return m.image_shift_retime_s.value_or(NAN) - applied;  // minus the colour's own latency
+}
+
+TEST(CaptureClock, TellsTheColourImagesOwnLatencyFromTheDepthsLeakIntoTheTilt) {
+  std::optional<double> before_depth = 0.0;
+  // A Kinect-like sensor: rotations 13 ms late, depth 27: the colour image 1 ms early.
+  EXPECT_NEAR(image_shift_retime(0.027, &before_depth), 0.001, 0.002);
+  EXPECT_FALSE(before_depth) << "nothing is moved before the depth's latency is measured";
+  // Streams late together: the image shift is where the stamps were moved, nothing to move.
+  EXPECT_NEAR(image_shift_retime(0.013), -0.013, 0.002);
+}
+
 TEST(CaptureClock, WithoutAGyroTheStampsStand) {
   Vehicle v;
   Config config;
@@ -354,6 +392,12 @@ TEST(CaptureTimingText, SaysWhatIsMeasuredAndWarnsOfAMountOffByMoreThanTheBound)
   t.depth_latency_s = 0.0259;
   t.depth_sigma_s = 0.0008;
   EXPECT_NE(capture_latency_text(t).find("apart, depth 25.9 +- 0.8 ms behind its stamps (applied"), std::string::npos)
+      << capture_latency_text(t);
+  EXPECT_EQ(capture_latency_text(t).find("image shift"), std::string::npos) << "not told apart yet";
+  t.image_shift_known = true;
+  t.image_shift_retime_s = 0.0171;
+  EXPECT_NE(capture_latency_text(t).find("at rest); image shift moved 17.1 ms (the colour image's own latency -1.0 ms)"),
+            std::string::npos)
       << capture_latency_text(t);
   EXPECT_EQ(mount_text(t, 0, 0, 0, 5), "") << "not measured";
   t.mount_known = true;

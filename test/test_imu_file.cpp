@@ -8,20 +8,20 @@
 
 #include "rgbd_odometry/io/imu_file.hpp"
 #include "rgbd_odometry/io/tum_sequence.hpp"
+#include "scratch_dir.hpp"
 
 namespace rgbdo {
 namespace {
 
-namespace fs = std::filesystem;
-
-std::string write(const std::string& name, const std::string& text) {
-  const fs::path p = fs::temp_directory_path() / ("rgbdo_imu_" + std::to_string(::getpid()) + "_" + name);
+std::string write(const ScratchDir& dir, const std::string& name, const std::string& text) {
+  const std::filesystem::path p = dir.path() / name;
   std::ofstream(p) << text;
   return p.string();
 }
 
 std::string refusal(const std::string& text) {
-  const std::string path = write("bad.txt", text);
+  const ScratchDir dir("rgbdo_imu", "refusal");
+  const std::string path = write(dir, "bad.txt", text);
   try {
     ImuFile file(path);
   } catch (const SourceError& e) {
@@ -31,8 +31,9 @@ std::string refusal(const std::string& text) {
 }
 
 TEST(ImuFile, ReadsTheStampsExactlyAndTheRates) {
+  const ScratchDir dir("rgbdo_imu", "read");
   // As make_imu.py writes it, with a line of extra columns and a blank one.
-  ImuFile file(write("good.txt", "# timestamp wx wy wz (rad/s, body FRD), from groundtruth.txt by make_imu.py\n"
+  ImuFile file(write(dir, "good.txt", "# timestamp wx wy wz (rad/s, body FRD), from groundtruth.txt by make_imu.py\n"
                                  "1305031098.685900 0.010000 -0.006000 0.008000\n"
                                  "\n"
                                  "1305031098.705900 0.5 -0.25 1e-3 99 extra columns\n"));
@@ -41,7 +42,7 @@ TEST(ImuFile, ReadsTheStampsExactlyAndTheRates) {
   EXPECT_EQ(file.samples()[0].rate, Eigen::Vector3d(0.010, -0.006, 0.008));
   EXPECT_EQ(file.samples()[1].rate, Eigen::Vector3d(0.5, -0.25, 1e-3));
   // A clock of its own may start before zero (ICL's stamps begin at 0, a shifted gyro earlier).
-  ImuFile early(write("early.txt", "-0.5 0.1 0.2 0.3\n-0.25 0 0 0\n0.000001 1 2 3\n"));
+  ImuFile early(write(dir, "early.txt", "-0.5 0.1 0.2 0.3\n-0.25 0 0 0\n0.000001 1 2 3\n"));
   ASSERT_EQ(early.samples().size(), 3u);
   EXPECT_EQ(early.samples()[0].t_ns, -500'000'000);
   EXPECT_EQ(early.samples()[1].t_ns, -250'000'000);
@@ -49,7 +50,8 @@ TEST(ImuFile, ReadsTheStampsExactlyAndTheRates) {
 }
 
 TEST(ImuFile, HandsTheSamplesOutAsTheReplayReachesThem) {
-  ImuFile file(write("take.txt", "1.0 0 0 0\n1.02 0 0 0\n1.04 0 0 0\n1.06 0 0 0\n"));
+  const ScratchDir dir("rgbdo_imu", "take");
+  ImuFile file(write(dir, "take.txt", "1.0 0 0 0\n1.02 0 0 0\n1.04 0 0 0\n1.06 0 0 0\n"));
   std::array<GyroSample, 2> out;
   EXPECT_EQ(file.take(999'999'999, out), 0u);
   EXPECT_EQ(file.take(1'030'000'000, out), 2u);

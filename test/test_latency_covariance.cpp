@@ -89,7 +89,7 @@ TEST(LatencyCovariance, ARestampedPairCarriesItsImageShiftsChangeTimesTheLatency
   PairRate prev = precise(before), curr = precise(after);
   curr.inverse_depth = 1 / z;
   LatencySigmas s{0, 0, 0};
-  s.restamped_s = L;
+  s.image_shift_off_s = L;
   const Matrix6d c = latency_covariance(s, Matrix6d::Zero(), curr, prev);
   const Eigen::Vector2d shift = image_shift_rate(after, z) - image_shift_rate(before, z);
   const Eigen::Vector2d as_rotation(shift.y(), -shift.x());  // (rx, ry)
@@ -104,7 +104,7 @@ TEST(LatencyCovariance, ARestampedPairCarriesItsImageShiftsChangeTimesTheLatency
   EXPECT_LT(latency_covariance(s, Matrix6d::Zero(), PairRate{slide, curr.covariance, curr.dt_s, 1 / z}, PairRate{after, curr.covariance, curr.dt_s, 1 / z})
                 .norm(),
             1e-12);
-  s.restamped_s = 0;
+  s.image_shift_off_s = 0;
   EXPECT_EQ(latency_covariance(s, Matrix6d::Zero(), curr, prev).norm(), 0.0);
 }
 

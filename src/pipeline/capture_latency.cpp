@@ -374,15 +374,40 @@ std::optional<double> CaptureClock::colour_latency_sigma_s() const {
 }
 
 MeasuredLatencySigmas CaptureClock::latency_sigmas() const {
-  MeasuredLatencySigmas m{colour_latency_sigma_s(), depth_latency_sigma_s(), std::nullopt, feed_ ? applied_s_ : 0.0,
-                          feed_ != nullptr};
+  MeasuredLatencySigmas m;
+  m.colour_s = colour_latency_sigma_s();
+  m.depth_s = depth_latency_sigma_s();
+  m.applied_s = feed_ ? applied_s_ : 0.0;
+  m.gyro = feed_ != nullptr;
   // The translations come from both streams, from an instant between the colour's and the
   // depth's, not the rotations' one applied (on fr1_xyz restamped, pair NEES 6.08 -> 5.33 with
   // it; thinned to every 2nd frame 8.54 -> 7.86, still above the gate's share); the image shift
   // comes from the colour's, not moved with the stamps by applied_s
   // (src/pipeline/MEASUREMENTS.md#restamped-pairs-and-their-image-shift).
   if (const auto lag = depth_lag_s()) m.translation_s = std::abs(*lag);
+  if (const auto retime = image_shift_retime_s()) {
+    m.image_shift_retime_s = *retime;
+    m.image_shift_retime_sigma_s = image_shift_retime_sigma_s();
+  }
   return m;
+}
+
+double CaptureClock::image_shift_retime_sigma_s() const {
+  const double c = estimator_.estimate().sigma_s, d = depth_estimator_.estimate().sigma_s;
+  return std::sqrt(4 * c * c + d * d);  // of 2 L - L_d
+}
+
+std::optional<double> CaptureClock::image_shift_retime_s() const {
+  const auto lag = depth_lag_s();
+  if (!config_.retime_image_shift || !lag || image_shift_retime_sigma_s() > config_.converged_sigma_s)
+    return std::nullopt;
+  const double colour_own_s = estimator_.estimate().latency_s - *lag;  // 2 L - L_d
+  // Shrunk towards 0 by its own noise (r (1 - sigma^2 / r^2), at least 0): a sensor on its
+  // stamps (ICL-NUIM's renderer) reads a few tenths of a millisecond either way, and its pairs,
+  // which err by hundredths of a millimetre, are moved by that to no gain.
+  const double r = applied_s_ - colour_own_s, sigma = image_shift_retime_sigma_s();
+  if (r == 0) return 0.0;
+  return r * std::max(0.0, 1 - sigma * sigma / (r * r));
 }
 
 std::optional<double> CaptureClock::depth_lag_s() const {
@@ -445,6 +470,9 @@ void CaptureClock::stamp(PairResult& r) {
   timing_.depth_latency_s = depth_estimator_.estimate().latency_s;
   timing_.depth_sigma_s = depth_estimator_.estimate().sigma_s;
   timing_.applied_s = applied_s_;
+  const auto retime = image_shift_retime_s();
+  timing_.image_shift_known = retime.has_value();
+  timing_.image_shift_retime_s = retime.value_or(0);
   timing_.pairs = e.pairs;
   timing_.uncovered = e.uncovered;
   timing_.rejected = e.rejected;

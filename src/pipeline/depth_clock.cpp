@@ -10,8 +10,10 @@ Eigen::Isometry3d at_colour_instants(const Eigen::Isometry3d& measured, const Ei
 }
 
 Eigen::Isometry3d DepthClock::carry(const Eigen::Isometry3d& measured, double dt_s, double restamped_s,
-                                    bool rotations_timed, double inverse_depth) {
-  if ((lag_s_ == 0 && tilt_lag_s_ == 0) || !(dt_s > 0)) return measured;
+                                    bool rotations_timed, double inverse_depth, double image_shift_retime_s) {
+  if (!(inverse_depth > 0)) image_shift_retime_s = 0;
+  // Nothing to carry, and nothing carried into the older frame: the motion as measured.
+  if ((lag_s_ == 0 && tilt_lag_s_ == 0 && image_shift_retime_s == 0 && count_ == 0) || !(dt_s > 0)) return measured;
   const double lag_s = lag_s_ == 0 ? 0.0 : lag_s_ - restamped_s;
   // Where a gyro times the rotations (capture_latency.hpp), their instants are its business: the
   // pairs are restamped at them once it has converged, and until then the latency priors cover
@@ -33,6 +35,13 @@ Eigen::Isometry3d DepthClock::carry(const Eigen::Isometry3d& measured, double dt
   // translation taking the opposite share.
   const double depth = tilt_lag_s != 0 ? 1.0 / inverse_depth : 0.0;
   shift_.translation() = Eigen::Vector3d(-depth * tilt.y(), depth * tilt.x(), lag_s * mean(0));
+  if (image_shift_retime_s != 0) {
+    // Back R / dt of this pair's image shift (tx w + ry, ty w - rx), as a translation.
+    const double back = image_shift_retime_s / dt_s;
+    const Eigen::Vector3d& t = measured.translation();
+    shift_.translation().x() -= back * (t.x() + rotation.y() / inverse_depth);
+    shift_.translation().y() -= back * (t.y() - rotation.x() / inverse_depth);
+  }
   // The first pair after a gap: the older frame's rate is unknown; the pair is left as
   // measured, and the newer frame's shift starts the chain.
   if (count_ == 1) return measured;

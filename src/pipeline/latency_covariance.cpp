@@ -1,6 +1,8 @@
 #include "rgbd_odometry/pipeline/latency_covariance.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
 
 namespace rgbdo {
 namespace {
@@ -20,10 +22,10 @@ Eigen::Matrix<double, N, N> shrunk_outer_product(const Eigen::Matrix<double, N, 
   return (1.0 - N / whitened) * change * change.transpose();
 }
 
-// L^2 S S^T in the (rx, ry) block: S the change of the image-shift rate, as rates about x and y
+// L^2 S S^T in the (rx, ry) block (L = off_s): S the change of the image-shift rate, as rates about x and y
 // (a point ahead at inverse depth w shifts by -(tx w + ry), -(ty w - rx)), its outer product
 // shrunk by the share its noise explains, as the change of rate's is.
-Matrix6d image_shift_term(double restamped_s, double inverse_depth, const Vector6d& change, const Matrix6d& noise) {
+Matrix6d image_shift_term(double off_s, double inverse_depth, const Vector6d& change, const Matrix6d& noise) {
   Eigen::Matrix<double, 2, 6> P = Eigen::Matrix<double, 2, 6>::Zero();
   P(0, 1) = -inverse_depth;
   P(0, 3) = 1;
@@ -32,7 +34,7 @@ Matrix6d image_shift_term(double restamped_s, double inverse_depth, const Vector
   const Eigen::Vector2d s = P * change;
   const Eigen::Matrix2d n = P * noise * P.transpose();
   Matrix6d c = Matrix6d::Zero();
-  c.block<2, 2>(3, 3) = restamped_s * restamped_s * shrunk_outer_product<2>(s, n);
+  c.block<2, 2>(3, 3) = off_s * off_s * shrunk_outer_product<2>(s, n);
   return c;
 }
 
@@ -48,7 +50,8 @@ Matrix6d through_latencies(const LatencySigmas& s, const Matrix6d& depth_respons
 Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_response, const PairRate& curr,
                             const std::optional<PairRate>& previous) {
   if (curr.dt_s <= 0 ||
-      (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0 && sigmas.restamped_s == 0))
+      (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0 && sigmas.image_shift_off_s == 0 &&
+       sigmas.image_shift_retime_s == 0))
     return Matrix6d::Zero();
   // The change of rate between the pair's two frames, from the two pairs' mean rates (whose
   // midpoints are (dt + dt') / 2 apart), and how much of its outer product is their noise.
@@ -60,7 +63,11 @@ Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_r
     change_noise = stretch * stretch * (change_noise + previous->covariance / (previous->dt_s * previous->dt_s));
   }
   Matrix6d c = through_latencies(sigmas, depth_response, shrunk_outer_product<6>(change, change_noise));
-  if (sigmas.restamped_s != 0) c += image_shift_term(sigmas.restamped_s, curr.inverse_depth, change, change_noise);
+  if (sigmas.image_shift_off_s != 0 || sigmas.image_shift_retime_s != 0) {
+    const double R = sigmas.image_shift_retime_s, interpolation = R * (1 - std::min(1.0, std::abs(R) / curr.dt_s));
+    const double off = std::sqrt(sigmas.image_shift_off_s * sigmas.image_shift_off_s + interpolation * interpolation / 2);
+    c += image_shift_term(off, curr.inverse_depth, change, change_noise);
+  }
   if (sigmas.integration_window_s > 0) {
     const Vector6d& earlier = previous && previous->dt_s > 0 ? previous->rate : curr.rate;
     const Matrix6d rates = curr.rate * curr.rate.transpose() + earlier * earlier.transpose();

@@ -388,9 +388,13 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.status = Status::Ok;
   r.inliers = static_cast<int>(fit_.inliers.size());
   r.inlier_threshold_m = fit_.threshold_m;
-  // The inliers' depth only where a tilt is carried (depth.tilt_lag_beyond_stamps_s).
-  const double inverse_depth = config_.depth.tilt_lag_beyond_stamps_s != 0 ? mean_inverse_depth(inlier_curr_) : 0.0;
-  r.T_prev_curr = depth_clock_.carry(fit_.T_prev_curr, dt_s, latency_.restamped_s, rotations_timed_, inverse_depth);
+  // The inliers' depth only where a tilt is carried (depth.tilt_lag_beyond_stamps_s) or the
+  // image shift retimed.
+  const double inverse_depth = config_.depth.tilt_lag_beyond_stamps_s != 0 || image_shift_retime_s_ != 0
+                                   ? mean_inverse_depth(inlier_curr_)
+                                   : 0.0;
+  r.T_prev_curr =
+      depth_clock_.carry(fit_.T_prev_curr, dt_s, applied_s_, rotations_timed_, inverse_depth, image_shift_retime_s_);
   r.depth_shift = depth_clock_.frame_shift();
   r.covariance = cov;
   return r;
@@ -481,7 +485,9 @@ void PairEstimator::fuse_depth_alignment(const ProcessedFrame& prev, const Proce
 
 void PairEstimator::add_latency_terms(double dt_s, Matrix6d& cov) {
   // The inliers' mean inverse depth, which only a restamped pair's image-shift term uses.
-  const double inverse_depth = latency_.restamped_s != 0 ? mean_inverse_depth(inlier_prev_) : 0.0;
+  const double inverse_depth = latency_.image_shift_off_s != 0 || latency_.image_shift_retime_s != 0
+                                   ? mean_inverse_depth(inlier_prev_)
+                                   : 0.0;
   const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s, inverse_depth};  // before the latency terms
   if (!paper_noise_) {
     const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)

@@ -84,6 +84,7 @@ void add_pipeline_settings(PipelineConfig& c, SettingsTable& table) {
       {"latency.converged_sigma_s", "s", "applied once known to this standard error", &c.latency.converged_sigma_s, 1e-5, 1, true},
       {"latency.max_slew", "s/s", "the applied latency moves towards the estimate at most this fast (seconds per second of frames)", &c.latency.max_slew, 1e-4, 0.5},
       {"latency.mount_warning_deg", "deg", "a camera mount measured against the gyro further than this from body.* is warned about", &c.latency.mount_warning_deg, 0.1, 180},
+      {"latency.retime_image_shift", "", "move the image shift (sideways translation) to the capture instants where the colour image's own latency is told apart from the depth's", &c.latency.retime_image_shift},
   });
 }
 

@@ -129,8 +129,13 @@ class CaptureLatencyEstimator {
 // nullopt where the priors stand.
 struct MeasuredLatencySigmas {
   std::optional<double> colour_s, depth_s, translation_s;
-  double applied_s = 0;  // the latency the stamps are moved by (LatencySigmas::restamped_s)
+  double applied_s = 0;  // the latency the stamps are moved by
   bool gyro = false;     // a gyro times the rotations (the depth clock carries no tilt lag)
+  // How far the pairs' image shift is to be moved to their times (image_shift_retime_s()) and
+  // the standard error of that; nullopt while it is not measured (the image shift then stays
+  // on its stamps and the covariance covers the whole restamp, LatencySigmas::image_shift_off_s).
+  std::optional<double> image_shift_retime_s;
+  double image_shift_retime_sigma_s = 0;
 };
 
 // The latency applied: each pair stamped at its frames' capture instants. Lives on the
@@ -151,7 +156,17 @@ class CaptureClock {
   // The depth alignment's rotations' latency less the pairs': the depth's lag behind the colour
   // beyond their stamps; nullopt while either is not measured.
   std::optional<double> depth_lag_s() const;
-  // All three, for PairEstimator::set_latency_sigmas.
+  // The colour image's own latency behind its stamps, told apart from the depth's lag that leaks
+  // into the tilt rotations the gyro times. A tilt from the features is half the image shift
+  // (the colour's, at its latency L_c) less half the slide (the depth's, at L_d): its latency,
+  // the one measured, is (L_c + L_d) / 2, so L_c = 2 L - L_d, and the image shift is moved by
+  // the latency applied less L_c to the pairs' times. fr1's Kinect: L 13.2 ms, L_d 27.4, L_c
+  // -1.0 (its image shift matches the motion capture best at the stamps); a sensor whose
+  // streams are late together reads L_c = L, nothing to move. nullopt while the depth's lag is
+  // not measured or the result is less certain than latency.converged_sigma_s.
+  // (src/pipeline/MEASUREMENTS.md#restamped-pairs-and-their-image-shift)
+  std::optional<double> image_shift_retime_s() const;
+  // All of them, for PairEstimator::set_latency_sigmas.
   MeasuredLatencySigmas latency_sigmas() const;
   // Learns from a finished pair (stamps as the sensor gave them) and restamps it at the
   // capture instants: t_prev at the instant its frame was given as the previous pair's current
@@ -162,6 +177,8 @@ class CaptureClock {
   const LatencyEstimate& depth_estimate() const { return depth_estimator_.estimate(); }
 
  private:
+  double image_shift_retime_sigma_s() const;
+
   LatencyConfig config_;
   GyroFeed* feed_;
   CaptureLatencyEstimator estimator_;        // the pairs' rotations: the colour's latency

@@ -37,6 +37,13 @@
 // (MEASUREMENTS.md, "Restamped pairs and their image shift"): carried the whole 17 ms there the
 // restamped 1-s drift grew by a tenth, carried 17 − 13 it did not. And where a gyro times the
 // rotations, no tilt is carried: the gyro's restamp is their instant.
+//
+// Their instant is not the image shift's. Where the capture clock tells the colour's own
+// latency apart (capture_latency.hpp), the image shift is moved the rest of the way, R: the
+// newer frame's pose goes back R / dt of this pair's image shift, as a sideways translation
+// (the rotations stay at the gyro's instant). That is the chain's image shift read R earlier
+// by linear interpolation between the frames, so a pair becomes (1 − R/dt) of its own image
+// shift and R/dt of the one before, and over a chain the shift telescopes to the ends' frames.
 #include <array>
 
 #include <Eigen/Geometry>
@@ -46,16 +53,18 @@ namespace rgbdo {
 class DepthClock {
  public:
   // lag_s: depth.lag_beyond_stamps_s; tilt_lag_s: depth.tilt_lag_beyond_stamps_s. Both 0 leave
-  // every motion as it is, restamped or not.
+  // every motion as it is, restamped or not, unless an image shift is retimed (carry()).
   explicit DepthClock(double lag_s, double tilt_lag_s = 0) : lag_s_(lag_s), tilt_lag_s_(tilt_lag_s) {}
 
   // A good pair's motion, as measured (between the depth instants): the newer frame's shift is
   // updated from its rates; the motion between the pair's times is returned. restamped_s:
   // the latency the capture clock applies to the pair's times (0 without a gyro).
   // rotations_timed: a gyro times the rotations; the tilt lag is then not carried.
-  // inverse_depth: the newer frame's inliers' mean 1/Z (the tilt is not carried without it).
+  // inverse_depth: the newer frame's inliers' mean 1/Z (neither the tilt nor the image shift is
+  // carried without it). image_shift_retime_s: how far the image shift is moved to the pair's
+  // times (CaptureClock::image_shift_retime_s; 0: it stays where it was measured).
   Eigen::Isometry3d carry(const Eigen::Isometry3d& measured, double dt_s, double restamped_s,
-                          bool rotations_timed = false, double inverse_depth = 0);
+                          bool rotations_timed = false, double inverse_depth = 0, double image_shift_retime_s = 0);
   // The newer frame's shift of the last carry() (identity after forget()).
   const Eigen::Isometry3d& frame_shift() const { return shift_; }
   // A gap or a failed pair: the velocity before it says nothing about the frames after.

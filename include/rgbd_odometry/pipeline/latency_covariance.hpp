@@ -40,7 +40,10 @@
 // lag leaks in (above). Against TUM fr1's motion capture the image shift matches best at the
 // stamps and the tilt rotations 14 ms later, which is the latency applied; restamped by it, the
 // pairs' image-shift errors double (src/pipeline/MEASUREMENTS.md#restamped-pairs-and-their-image-shift).
-// Until the colour's own instant is told apart from the leak, a pair restamped by L carries
+// Where the colour's own instant is told apart from the leak (the depth's lag measured as well),
+// the image shift is retimed to the pair's times (pipeline/depth_clock.hpp) and only the
+// retime's standard error and the interpolation's are left; where it is not, L is the whole
+// restamp. Either way
 //    image shift:  L^2 S S^T   in the (rx, ry) block,
 // S the change of the image-shift rate (as rates about x and y), shrunk as D D^T is. It is 0
 // where nothing is restamped (no gyro, or a sensor on its stamps).
@@ -66,9 +69,14 @@ struct LatencySigmas {
   // sigma of the translations' instant apart from the rotations' (the translation alone: a
   // pair restamped at its rotations' measured instant, pipeline/capture_latency.hpp; 0 otherwise)
   double translation_s = 0;
-  // The latency the pair's stamps were moved by (pipeline/capture_latency.hpp; 0: none): its
-  // image shift was not moved with them.
-  double restamped_s = 0;
+  // How far the pair's image shift may sit from the pair's times (0: on them): the latency the
+  // stamps were moved by (pipeline/capture_latency.hpp) where the image shift is not retimed to
+  // them, the retime's standard error where it is (pipeline/depth_clock.hpp).
+  double image_shift_off_s = 0;
+  // How far the image shift was moved, R (0: not): by linear interpolation between the frames,
+  // which errs by R (dt - R) / 2 times the camera's acceleration at each end, so the term also
+  // takes (R (1 - R/dt))^2 / 2 (a change of rate shared equally by the two ends' pairs).
+  double image_shift_retime_s = 0;
 };
 
 inline LatencySigmas latency_sigmas(const CovarianceConfig& c) {

@@ -197,6 +197,10 @@ struct LatencyConfig {
   double max_slew = 0.05;
   // A measured camera mount further than this from body.* is warned about, degrees.
   double mount_warning_deg = 5;
+  // Move the pairs' image shift to their times where the colour image's own latency is told
+  // apart from the depth's (CaptureClock::image_shift_retime_s); off: it stays on the stamps
+  // and the covariance covers the whole restamp.
+  bool retime_image_shift = true;
 };
 
 // Every setting of the pipeline: what each stage and the capture-latency measurement read.
