@@ -316,14 +316,21 @@ TEST(CaptureClock, EachFrameIsRestampedOnceAndThePairsChain) {
 
 // The tilt rotations the gyro times are half the colour's image shift and half the depth's
 // slide: with the depth's own latency measured too, the colour image's is 2 L - L_d, and the
-// image shift is moved the latency applied less that.
-double image_shift_retime(double depth_latency_s, std::optional<double>* before_depth = nullptr) {
+// image shift is moved the latency applied less that, shrunk towards 0 by its standard error.
+struct ColourImageLatency {
+  std::optional<double> before_depth;  // the retime while the depth's latency is not measured yet
+  double latency_s = NAN, sigma_s = NAN, retime_s = NAN, applied_s = NAN;
+};
+
+ColourImageLatency colour_image_latency(double depth_latency_s) {
   Vehicle v;
   v.latency_s = 0.013;
+  v.camera_noise_rad = 0.03 * M_PI / 180;  // a quieter camera than the others': L_c's error is 2 L's and L_d's
   VectorGyro gyro(v.gyro(9.5, 21));
   Config config;
   CaptureClock clock(config, &gyro);
-  double applied = 0;
+  ColourImageLatency out;
+  out.before_depth = 0.0;
   for (double t = 10; t + 1 / kFrameHz < 20; t += 1 / kFrameHz) {
     PairResult r = solved_pair(v, t);
     // The depth frames carry the colour's stamps, their rotation taken depth_latency_s before.
@@ -331,24 +338,32 @@ double image_shift_retime(double depth_latency_s, std::optional<double>* before_
     r.depth_rotation = v.pair_rotation(t - early, t - early + 1 / kFrameHz);
     r.t_depth_prev_ns = r.t_prev_ns;
     r.t_depth_curr_ns = r.t_curr_ns;
-    if (before_depth && t == 10) *before_depth = clock.latency_sigmas().image_shift_retime_s;
+    if (t == 10) out.before_depth = clock.latency_sigmas().image_shift_retime_s;
     clock.stamp(r);
-    applied = r.timing.applied_s;
-    EXPECT_EQ(r.timing.image_shift_known, clock.image_shift_retime_s().has_value());
+    out.applied_s = r.timing.applied_s;
+    EXPECT_EQ(r.timing.colour_image_known, clock.colour_image_latency_s().has_value());
   }
   const MeasuredLatencySigmas m = clock.latency_sigmas();
-  EXPECT_TRUE(m.image_shift_retime_s);
-  EXPECT_LT(m.image_shift_retime_sigma_s, 0.0035);  // 3.0 ms here: twice the colour's, and the depth's
-  return m.image_shift_retime_s.value_or(NAN) - applied;  // minus the colour's own latency
+  out.latency_s = clock.colour_image_latency_s().value_or(NAN);
+  out.sigma_s = clock.colour_image_latency_sigma_s();
+  out.retime_s = m.image_shift_retime_s.value_or(NAN);
+  EXPECT_EQ(m.image_shift_retime_sigma_s, out.sigma_s);
+  return out;
 }
 
 TEST(CaptureClock, TellsTheColourImagesOwnLatencyFromTheDepthsLeakIntoTheTilt) {
-  std::optional<double> before_depth = 0.0;
   // A Kinect-like sensor: rotations 13 ms late, depth 27: the colour image 1 ms early.
-  EXPECT_NEAR(image_shift_retime(0.027, &before_depth), 0.001, 0.002);
-  EXPECT_FALSE(before_depth) << "nothing is moved before the depth's latency is measured";
+  const ColourImageLatency kinect = colour_image_latency(0.027);
+  EXPECT_FALSE(kinect.before_depth) << "nothing is moved before the depth's latency is measured";
+  EXPECT_LT(kinect.sigma_s, 0.0015);
+  EXPECT_NEAR(kinect.latency_s, -0.001, 2 * kinect.sigma_s);
+  const double r = kinect.applied_s - kinect.latency_s;
+  EXPECT_NEAR(kinect.retime_s, r * (1 - kinect.sigma_s * kinect.sigma_s / (r * r)), 1e-12) << "shrunk by its error";
+  EXPECT_GT(kinect.retime_s, 0.011);
   // Streams late together: the image shift is where the stamps were moved, nothing to move.
-  EXPECT_NEAR(image_shift_retime(0.013), -0.013, 0.002);
+  const ColourImageLatency together = colour_image_latency(0.013);
+  EXPECT_NEAR(together.latency_s, 0.013, 2 * together.sigma_s);
+  EXPECT_LT(std::abs(together.retime_s), 0.001);
 }
 
 TEST(CaptureClock, WithoutAGyroTheStampsStand) {
@@ -393,10 +408,12 @@ TEST(CaptureTimingText, SaysWhatIsMeasuredAndWarnsOfAMountOffByMoreThanTheBound)
   t.depth_sigma_s = 0.0008;
   EXPECT_NE(capture_latency_text(t).find("apart, depth 25.9 +- 0.8 ms behind its stamps (applied"), std::string::npos)
       << capture_latency_text(t);
-  EXPECT_EQ(capture_latency_text(t).find("image shift"), std::string::npos) << "not told apart yet";
-  t.image_shift_known = true;
-  t.image_shift_retime_s = 0.0171;
-  EXPECT_NE(capture_latency_text(t).find("at rest); image shift moved 17.1 ms (the colour image's own latency -1.0 ms)"),
+  EXPECT_EQ(capture_latency_text(t).find("image"), std::string::npos) << "not told apart yet";
+  t.colour_image_known = true;
+  t.colour_image_latency_s = -0.0009;
+  t.colour_image_sigma_s = 0.0018;
+  t.image_shift_retime_s = 0.0169;
+  EXPECT_NE(capture_latency_text(t).find("at rest); the colour image's own latency -0.9 +- 1.8 ms, its image shift moved 16.9 ms"),
             std::string::npos)
       << capture_latency_text(t);
   EXPECT_EQ(mount_text(t, 0, 0, 0, 5), "") << "not measured";

@@ -30,9 +30,9 @@ std::string capture_latency_text(const CaptureTiming& t) {
   }
   s << " (applied " << t.applied_s * 1e3 << " ms; " << t.pairs << " pairs, " << t.uncovered << " not covered by the gyro, "
     << t.rejected << " left out as failed fits, " << t.at_rest << " at rest)";
-  if (t.image_shift_known)
-    s << "; image shift moved " << t.image_shift_retime_s * 1e3 << " ms (the colour image's own latency "
-      << (t.applied_s - t.image_shift_retime_s) * 1e3 << " ms)";
+  if (t.colour_image_known)
+    s << "; the colour image's own latency " << t.colour_image_latency_s * 1e3 << " +- " << t.colour_image_sigma_s * 1e3
+      << " ms, its image shift moved " << t.image_shift_retime_s * 1e3 << " ms";
   return s.str();
 }
 

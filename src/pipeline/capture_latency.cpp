@@ -387,25 +387,29 @@ MeasuredLatencySigmas CaptureClock::latency_sigmas() const {
   if (const auto lag = depth_lag_s()) m.translation_s = std::abs(*lag);
   if (const auto retime = image_shift_retime_s()) {
     m.image_shift_retime_s = *retime;
-    m.image_shift_retime_sigma_s = image_shift_retime_sigma_s();
+    m.image_shift_retime_sigma_s = colour_image_latency_sigma_s();
   }
   return m;
 }
 
-double CaptureClock::image_shift_retime_sigma_s() const {
+double CaptureClock::colour_image_latency_sigma_s() const {
   const double c = estimator_.estimate().sigma_s, d = depth_estimator_.estimate().sigma_s;
-  return std::sqrt(4 * c * c + d * d);  // of 2 L - L_d
+  return std::sqrt(4 * c * c + d * d);
+}
+
+std::optional<double> CaptureClock::colour_image_latency_s() const {
+  const auto lag = depth_lag_s();
+  if (!lag || colour_image_latency_sigma_s() > config_.converged_sigma_s) return std::nullopt;
+  return estimator_.estimate().latency_s - *lag;  // 2 L - L_d
 }
 
 std::optional<double> CaptureClock::image_shift_retime_s() const {
-  const auto lag = depth_lag_s();
-  if (!config_.retime_image_shift || !lag || image_shift_retime_sigma_s() > config_.converged_sigma_s)
-    return std::nullopt;
-  const double colour_own_s = estimator_.estimate().latency_s - *lag;  // 2 L - L_d
+  const auto colour = colour_image_latency_s();
+  if (!config_.retime_image_shift || !colour) return std::nullopt;
   // Shrunk towards 0 by its own noise (r (1 - sigma^2 / r^2), at least 0): a sensor on its
   // stamps (ICL-NUIM's renderer) reads a few tenths of a millisecond either way, and its pairs,
   // which err by hundredths of a millimetre, are moved by that to no gain.
-  const double r = applied_s_ - colour_own_s, sigma = image_shift_retime_sigma_s();
+  const double r = applied_s_ - *colour, sigma = colour_image_latency_sigma_s();
   if (r == 0) return 0.0;
   return r * std::max(0.0, 1 - sigma * sigma / (r * r));
 }
@@ -470,8 +474,11 @@ void CaptureClock::stamp(PairResult& r) {
   timing_.depth_latency_s = depth_estimator_.estimate().latency_s;
   timing_.depth_sigma_s = depth_estimator_.estimate().sigma_s;
   timing_.applied_s = applied_s_;
+  const auto colour = colour_image_latency_s();
   const auto retime = image_shift_retime_s();
-  timing_.image_shift_known = retime.has_value();
+  timing_.colour_image_known = colour.has_value();
+  timing_.colour_image_latency_s = colour.value_or(0);
+  timing_.colour_image_sigma_s = colour ? colour_image_latency_sigma_s() : 0.0;
   timing_.image_shift_retime_s = retime.value_or(0);
   timing_.pairs = e.pairs;
   timing_.uncovered = e.uncovered;

@@ -32,9 +32,10 @@ struct CaptureTiming {
   double applied_s = 0;    // what this pair's current frame was restamped by
   bool depth_known = false;   // the depth alignment's rotations' latency, behind the depth stamps
   double depth_latency_s = 0, depth_sigma_s = 0;
-  // The pairs' image shift moved to their times: the latency applied less the colour image's own
-  // (CaptureClock::image_shift_retime_s); not known while the depth's lag is not measured.
-  bool image_shift_known = false;
+  // The colour image's own latency, 2 L - L_d (CaptureClock::colour_image_latency_s), and how far
+  // the pairs' image shift was moved to their times (0: not moved).
+  bool colour_image_known = false;
+  double colour_image_latency_s = 0, colour_image_sigma_s = 0;
   double image_shift_retime_s = 0;
   std::uint64_t pairs = 0; // pairs measured against the gyro so far
   std::uint64_t uncovered = 0, rejected = 0, at_rest = 0;  // of those: no gyro over them, a failed fit's, at rest

@@ -159,12 +159,16 @@ class CaptureClock {
   // The colour image's own latency behind its stamps, told apart from the depth's lag that leaks
   // into the tilt rotations the gyro times. A tilt from the features is half the image shift
   // (the colour's, at its latency L_c) less half the slide (the depth's, at L_d): its latency,
-  // the one measured, is (L_c + L_d) / 2, so L_c = 2 L - L_d, and the image shift is moved by
-  // the latency applied less L_c to the pairs' times. fr1's Kinect: L 13.2 ms, L_d 27.4, L_c
-  // -1.0 (its image shift matches the motion capture best at the stamps); a sensor whose
-  // streams are late together reads L_c = L, nothing to move. nullopt while the depth's lag is
-  // not measured or the result is less certain than latency.converged_sigma_s.
-  // (src/pipeline/MEASUREMENTS.md#restamped-pairs-and-their-image-shift)
+  // the one measured, is (L_c + L_d) / 2, so L_c = 2 L - L_d. fr1's Kinect: L 13.2 ms, L_d 27.4,
+  // L_c -1.1 (its image shift matches the motion capture best at the stamps); a sensor whose
+  // streams are late together reads L_c = L. nullopt while the depth's lag is not measured or
+  // L_c is less certain than latency.converged_sigma_s.
+  // (src/pipeline/MEASUREMENTS.md#the-image-shift-moved-to-the-capture-instants)
+  std::optional<double> colour_image_latency_s() const;
+  double colour_image_latency_sigma_s() const;  // of 2 L - L_d
+  // How far the image shift is moved to the pairs' times: the latency applied less L_c, shrunk
+  // towards 0 by L_c's standard error; nullopt where L_c is not known or
+  // latency.retime_image_shift is off.
   std::optional<double> image_shift_retime_s() const;
   // All of them, for PairEstimator::set_latency_sigmas.
   MeasuredLatencySigmas latency_sigmas() const;
@@ -177,8 +181,6 @@ class CaptureClock {
   const LatencyEstimate& depth_estimate() const { return depth_estimator_.estimate(); }
 
  private:
-  double image_shift_retime_sigma_s() const;
-
   LatencyConfig config_;
   GyroFeed* feed_;
   CaptureLatencyEstimator estimator_;        // the pairs' rotations: the colour's latency
