@@ -390,11 +390,11 @@ PairResult PairEstimator::estimate(const ProcessedFrame& prev, const ProcessedFr
   r.inlier_threshold_m = fit_.threshold_m;
   // The inliers' depth only where a tilt is carried (depth.tilt_lag_beyond_stamps_s) or the
   // image shift retimed.
-  const double inverse_depth = config_.depth.tilt_lag_beyond_stamps_s != 0 || image_shift_retime_s_ != 0
+  const double inverse_depth = config_.depth.tilt_lag_beyond_stamps_s != 0 || latency_.image_shift_retime_s != 0
                                    ? mean_inverse_depth(inlier_curr_)
                                    : 0.0;
   r.T_prev_curr =
-      depth_clock_.carry(fit_.T_prev_curr, dt_s, applied_s_, rotations_timed_, inverse_depth, image_shift_retime_s_);
+      depth_clock_.carry(fit_.T_prev_curr, dt_s, applied_s_, rotations_timed_, inverse_depth, latency_.image_shift_retime_s);
   r.depth_shift = depth_clock_.frame_shift();
   r.covariance = cov;
   return r;

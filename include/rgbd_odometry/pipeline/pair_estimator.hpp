@@ -52,10 +52,9 @@ class PairEstimator {
     latency_.depth_s = measured.depth_s.value_or(config_.covariance.depth_latency_sigma_s);
     latency_.translation_s = measured.translation_s.value_or(0);
     applied_s_ = measured.applied_s;
-    image_shift_retime_s_ = measured.image_shift_retime_s.value_or(0);
     latency_.image_shift_off_s =
         measured.image_shift_retime_s ? measured.image_shift_retime_sigma_s : measured.applied_s;
-    latency_.image_shift_retime_s = image_shift_retime_s_;
+    latency_.image_shift_retime_s = measured.image_shift_retime_s.value_or(0);  // depth_clock.hpp carries it
     rotations_timed_ = measured.gyro;
   }
 
@@ -139,7 +138,6 @@ class PairEstimator {
   DepthClock depth_clock_;  // the depth's lag carried out of the motion (optical axis, tilt)
   bool rotations_timed_ = false;  // a gyro times the rotations (set_latency_sigmas)
   double applied_s_ = 0;             // the latency the pairs' stamps are moved by (set_latency_sigmas)
-  double image_shift_retime_s_ = 0;  // how far their image shift is moved to their times (depth_clock.hpp)
   DepthNoiseEstimate depth_noise_;
   KeypointSigmaEstimate keypoint_sigma_;
   std::vector<Match> matches_;
