@@ -50,8 +50,7 @@ Matrix6d through_latencies(const LatencySigmas& s, const Matrix6d& depth_respons
 Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_response, const PairRate& curr,
                             const std::optional<PairRate>& previous) {
   if (curr.dt_s <= 0 ||
-      (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0 && sigmas.image_shift_off_s == 0 &&
-       sigmas.image_shift_retime_s == 0))
+      (sigmas.colour_s <= 0 && sigmas.depth_s <= 0 && sigmas.translation_s <= 0 && !sigmas.image_shift_term()))
     return Matrix6d::Zero();
   // The change of rate between the pair's two frames, from the two pairs' mean rates (whose
   // midpoints are (dt + dt') / 2 apart), and how much of its outer product is their noise.
@@ -63,7 +62,7 @@ Matrix6d latency_covariance(const LatencySigmas& sigmas, const Matrix6d& depth_r
     change_noise = stretch * stretch * (change_noise + previous->covariance / (previous->dt_s * previous->dt_s));
   }
   Matrix6d c = through_latencies(sigmas, depth_response, shrunk_outer_product<6>(change, change_noise));
-  if (sigmas.image_shift_off_s != 0 || sigmas.image_shift_retime_s != 0) {
+  if (sigmas.image_shift_term()) {
     const double R = sigmas.image_shift_retime_s, interpolation = R * (1 - std::min(1.0, std::abs(R) / curr.dt_s));
     const double off = std::sqrt(sigmas.image_shift_off_s * sigmas.image_shift_off_s + interpolation * interpolation / 2);
     c += image_shift_term(off, curr.inverse_depth, change, change_noise);

@@ -485,9 +485,7 @@ void PairEstimator::fuse_depth_alignment(const ProcessedFrame& prev, const Proce
 
 void PairEstimator::add_latency_terms(double dt_s, Matrix6d& cov) {
   // The inliers' mean inverse depth, which only a restamped pair's image-shift term uses.
-  const double inverse_depth = latency_.image_shift_off_s != 0 || latency_.image_shift_retime_s != 0
-                                   ? mean_inverse_depth(inlier_prev_)
-                                   : 0.0;
+  const double inverse_depth = latency_.image_shift_term() ? mean_inverse_depth(inlier_prev_) : 0.0;
   const PairRate own{xi_from_transform(fit_.T_prev_curr) / dt_s, cov, dt_s, inverse_depth};  // before the latency terms
   if (!paper_noise_) {
     const Matrix6d depth_response = latency_.depth_s > 0 ? covariance_.depth_latency_response(inlier_prev_, inlier_curr_)

@@ -77,6 +77,8 @@ struct LatencySigmas {
   // which errs by R (dt - R) / 2 times the camera's acceleration at each end, so the term also
   // takes (R (1 - R/dt))^2 / 2 (a change of rate shared equally by the two ends' pairs).
   double image_shift_retime_s = 0;
+  // The pair carries the image-shift term (which needs the inliers' mean inverse depth).
+  bool image_shift_term() const { return image_shift_off_s != 0 || image_shift_retime_s != 0; }
 };
 
 inline LatencySigmas latency_sigmas(const CovarianceConfig& c) {
