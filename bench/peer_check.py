@@ -42,14 +42,52 @@ def read_inputs(log_path, evaluation_path, peer_path):
     ours = {k: (xi, cov) for k, (_, _, xi, cov) in log.items()}
     evaluation, allowance = read_evaluation(evaluation_path)
     errors = {stamp_key(t): np.array([evaluation["e_" + a][n] for a in AXES]) for n, t in enumerate(evaluation["t_s"])}
-    peer = {stamp_key(r["t_curr"]): np.array([float(r[a]) for a in AXES]) for r in read_rows(peer_path) if r["ok"] == "1"}
+    peer_rows = read_rows(peer_path)
+    frame_at = frame_join(sorted({t for v in log.values() for t in v[:2]}),
+                          sorted({float(r[end]) for r in peer_rows for end in ("t_prev", "t_curr")}))
+    log_prev = {k: stamp_key(v[0]) for k, v in log.items()}
+    peer = {}
+    for r in peer_rows:  # a peer pair joins the log's pair of the same two frames
+        prev, curr = (frame_at.get(stamp_key(r[end])) for end in ("t_prev", "t_curr"))
+        if r["ok"] == "1" and curr is not None and log_prev.get(curr) == prev:
+            peer[curr] = np.array([float(r[a]) for a in AXES])
     keys = sorted(k for k in ours if k in errors and k in peer and np.all(np.isfinite(errors[k])))
-    if not keys:
-        sys.exit(f"peer_check: no pair is in all of {log_path}, {evaluation_path} and {peer_path}")
+    if len(keys) < max(kMinPairs, len(ours) // 2):
+        sys.exit(f"peer_check: {len(keys)} of the log's {len(ours)} solved pairs are in all of {log_path}, "
+                 f"{evaluation_path} and {peer_path}: too few for a verdict (at least {kMinPairs} and half of them)")
     xi = np.array([ours[k][0] for k in keys])
     stamps = np.array([log[k][:2] for k in keys])
     return (stamps, xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]),
             np.array([ours[k][1] for k in keys]), allowance)
+
+
+# Below this many pairs joined, or half the log's, the hat's sampling error would be the verdict
+# (a restamped log joined on its times alone once left 2 pairs of 235, and a verdict on them).
+kMinPairs = 30
+# How far a capture clock may have moved a frame's time from its stamp (latency.min_s, max_s).
+kLatencyRange_s = (-0.1, 0.25)
+
+
+def frame_join(log_times, peer_stamps):
+    """stamp_key(peer stamp) -> stamp_key(log time) of the same frame (both lists sorted). Where a
+    gyro restamped the log (src/pipeline/capture_latency.hpp) its times are the stamps less a
+    latency that moves slowly from frame to frame (at most latency.max_slew): each log time goes
+    with the peer stamp, within the latencies' range, whose latency is nearest the last frame
+    joined (0 at the start: nothing applied yet), if nearer than half the stamps' spacing there;
+    a frame that moved further is left out rather than joined to its neighbour. Unrestamped logs
+    join on equal stamps."""
+    stamps = np.array(peer_stamps)
+    joined, latency = {}, 0.0
+    for t in log_times:
+        lo, hi = np.searchsorted(stamps, [t + kLatencyRange_s[0], t + kLatencyRange_s[1]])
+        if lo == hi:
+            continue
+        best = lo + int(np.argmin(np.abs(stamps[lo:hi] - t - latency)))
+        spacing = np.min(np.diff(stamps[max(best - 1, 0):best + 2])) if len(stamps) > 1 else np.inf
+        if abs(stamps[best] - t - latency) < spacing / 2:
+            latency = stamps[best] - t
+            joined[stamp_key(stamps[best])] = stamp_key(t)
+    return joined
 
 
 def three_cornered_hat(ours_gt, peer_gt):
@@ -153,6 +191,37 @@ def report(log_path, evaluation_path, peer_path):
               "error)")
 
 
+def restamped_copy(paths, tmp):
+    """The self-test's log and evaluation with every frame's time its stamp less a latency that
+    grows by 0.5 ms a frame to 25 ms (past half a frame, where the nearest stamp is the next
+    frame's), analysed against the same peer: (pairs joined, whitened parts)."""
+    log, evaluation_path, peer = paths
+    rows = [line for line in open(log) if not line.startswith("#")]
+    shift = {}  # stamp key -> restamped time
+
+    def moved(t):
+        k = stamp_key(t)
+        if k not in shift:
+            shift[k] = float(t) - min(0.025, 0.0005 * len(shift))
+        return shift[k]
+
+    out = [os.path.join(tmp, name) for name in ("restamped_log.csv", "restamped_evaluation.csv")]
+    with open(out[0], "w") as f:
+        f.write(rows[0])
+        for r in rows[1:]:
+            t_prev, t_curr, rest = r.split(",", 2)
+            f.write(f"{moved(t_prev):.6f},{moved(t_curr):.6f},{rest}")
+    with open(evaluation_path) as src, open(out[1], "w") as f:
+        for line in src:
+            if line.startswith("#") or line.startswith("t_s"):
+                f.write(line)
+            else:
+                t, rest = line.split(",", 1)
+                f.write(f"{moved(t):.6f},{rest}")
+    count, _, _, along, _, _, _ = analyse(out[0], out[1], peer)
+    return count, along
+
+
 def self_test():
     """Synthetic pairs with known common and own errors, through the same files and code."""
     rng = np.random.default_rng(7)
@@ -184,7 +253,13 @@ def self_test():
                 peer.write(f"{t - 1 / 30:.6f},{t:.6f},1," + ",".join(f"{x:.12g}" for x in other) + "\n")
             peer.write(f"{t:.6f},{t + 1 / 30:.6f},0,nan,nan,nan,nan,nan,nan\n")  # a failed peer pair is skipped
         count, (e_ours, e_peer), _, along, allowance, drifts, windowed = analyse(*paths)
+        restamped_count, restamped_along = restamped_copy(paths, tmp)
     failures = []
+    # The same pairs restamped as a gyro's capture clock does (each frame its stamp less a
+    # latency that grows from 0 to 25 ms): every pair joined to the peer's, the same figures.
+    if restamped_count != n or not np.allclose(restamped_along[1], along[1]):
+        failures.append(f"restamped log: {restamped_count} pairs joined of {n}, our own part {restamped_along[1]} "
+                        f"against {along[1]}")
     # The hat over the windows: each part's window sums, as generated, within a quarter of the
     # largest part (their cross terms over ~130 independent windows).
     t = 1000 + np.arange(n) / 30
@@ -226,7 +301,7 @@ def self_test():
         print("peer_check self-test FAILED:\n  " + "\n  ".join(failures))
         return 1
     print(f"peer_check self-test passed: {n} synthetic pairs, the common, own and peer mean squares, per pair and "
-          "over 1-s windows, and both drifts recovered")
+          "over 1-s windows, and both drifts recovered; the same pairs restamped joined alike")
     return 0
 
 
