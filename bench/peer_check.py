@@ -35,6 +35,13 @@ import numpy as np
 from evaluation_csv import AXES, LOG_HEADER, allowance_variances, log_row, read_evaluation, read_log, read_rows, stamp_key, summed_over, windows
 
 
+# Below this many pairs joined, or half the log's, the hat's sampling error would be the verdict
+# (a restamped log joined on its times alone once left 2 pairs of 235, and a verdict on them).
+MIN_PAIRS = 30
+# How far a capture clock may have moved a frame's time from its stamp (latency.min_s, max_s).
+LATENCY_RANGE_S = (-0.1, 0.25)
+
+
 def read_inputs(log_path, evaluation_path, peer_path):
     """Pairs present, solved, in all three files, in time order: their stamps (t_prev, t_curr),
     ours, peer (xi), e_ours, reported covariance; and the evaluation's ground-truth allowance."""
@@ -52,20 +59,13 @@ def read_inputs(log_path, evaluation_path, peer_path):
         if r["ok"] == "1" and curr is not None and log_prev.get(curr) == prev:
             peer[curr] = np.array([float(r[a]) for a in AXES])
     keys = sorted(k for k in ours if k in errors and k in peer and np.all(np.isfinite(errors[k])))
-    if len(keys) < max(kMinPairs, len(ours) // 2):
+    if len(keys) < max(MIN_PAIRS, len(ours) // 2):
         sys.exit(f"peer_check: {len(keys)} of the log's {len(ours)} solved pairs are in all of {log_path}, "
-                 f"{evaluation_path} and {peer_path}: too few for a verdict (at least {kMinPairs} and half of them)")
+                 f"{evaluation_path} and {peer_path}: too few for a verdict (at least {MIN_PAIRS} and half of them)")
     xi = np.array([ours[k][0] for k in keys])
     stamps = np.array([log[k][:2] for k in keys])
     return (stamps, xi, np.array([peer[k] for k in keys]), np.array([errors[k] for k in keys]),
             np.array([ours[k][1] for k in keys]), allowance)
-
-
-# Below this many pairs joined, or half the log's, the hat's sampling error would be the verdict
-# (a restamped log joined on its times alone once left 2 pairs of 235, and a verdict on them).
-kMinPairs = 30
-# How far a capture clock may have moved a frame's time from its stamp (latency.min_s, max_s).
-kLatencyRange_s = (-0.1, 0.25)
 
 
 def frame_join(log_times, peer_stamps):
@@ -79,7 +79,7 @@ def frame_join(log_times, peer_stamps):
     stamps = np.array(peer_stamps)
     joined, latency = {}, 0.0
     for t in log_times:
-        lo, hi = np.searchsorted(stamps, [t + kLatencyRange_s[0], t + kLatencyRange_s[1]])
+        lo, hi = np.searchsorted(stamps, [t + LATENCY_RANGE_S[0], t + LATENCY_RANGE_S[1]])
         if lo == hi:
             continue
         best = lo + int(np.argmin(np.abs(stamps[lo:hi] - t - latency)))
