@@ -175,9 +175,7 @@ void CaptureLatencyEstimator::process(const Pair& p) {
     const double at = (estimate_.latency_s - config_.min_s) / (kStepNs * 1e-9);
     const int k = std::clamp(static_cast<int>(std::lround(at)), 0, offsets_ - 1);
     const Eigen::Vector3d r = residual[static_cast<std::size_t>(k)] + estimate_.gyro_bias * dt;
-    judged_r2_[judged_next_] = r.squaredNorm();
-    judged_next_ = (judged_next_ + 1) % judged_r2_.size();
-    judged_count_ = std::min(judged_count_ + 1, judged_r2_.size());
+    judged_r2_.push(r.squaredNorm());
     if (outside_gate(r, residual, k)) {
       ++estimate_.rejected;
       return;
@@ -225,13 +223,7 @@ bool CaptureLatencyEstimator::outside_gate(const Eigen::Vector3d& r, const std::
   // and the fit never learn it: the median of the last pairs judged, all of them, bounds it
   // from below (a failed fit now and then does not move a median).
   double s = std::max(estimate_.scatter, kLeastNoise);
-  if (judged_count_ >= kLeastJudged) {
-    std::array<double, kJudgedPairs> recent{};
-    std::copy_n(judged_r2_.begin(), judged_count_, recent.begin());
-    const auto mid = recent.begin() + static_cast<std::ptrdiff_t>(judged_count_ / 2);
-    std::nth_element(recent.begin(), mid, recent.begin() + static_cast<std::ptrdiff_t>(judged_count_));
-    s = std::max(s, *mid / kChi2_3_Median);
-  }
+  if (judged_r2_.count() >= kLeastJudged) s = std::max(s, judged_r2_.median() / kChi2_3_Median);
   const double v = estimate_.sigma_s * estimate_.sigma_s;
   const double rg = r.dot(g);
   const double mahalanobis = (r.squaredNorm() - v * rg * rg / (s + v * g.squaredNorm())) / s;
@@ -360,6 +352,7 @@ CaptureClock::CaptureClock(const PipelineConfig& config, GyroFeed* feed)
       feed_(config.latency.enabled ? feed : nullptr),
       estimator_(config.latency, extrinsic_from(config.body).R_body_camera),
       depth_estimator_(config.latency, extrinsic_from(config.body).R_body_camera),
+      R_body_camera_(extrinsic_from(config.body).R_body_camera),
       taken_(256) {
   timing_.gyro = feed_ != nullptr;
 }
@@ -393,14 +386,16 @@ MeasuredLatencySigmas CaptureClock::latency_sigmas() const {
 }
 
 double CaptureClock::colour_image_latency_sigma_s() const {
-  const double c = estimator_.estimate().sigma_s, d = depth_estimator_.estimate().sigma_s;
-  return std::sqrt(4 * c * c + d * d);
+  // 2 L - L_d = L - lag, whose error is nearly free of L's (the errors the two fits share
+  // cancel in the lag, depth_lag_fit.hpp).
+  const double c = estimator_.estimate().sigma_s, l = depth_lag_sigma_s();
+  return std::sqrt(c * c + l * l);
 }
 
 std::optional<double> CaptureClock::colour_image_latency_s() const {
   const auto lag = depth_lag_s();
   if (!lag || colour_image_latency_sigma_s() > config_.converged_sigma_s) return std::nullopt;
-  return estimator_.estimate().latency_s - *lag;  // 2 L - L_d
+  return estimator_.estimate().latency_s - *lag;  // 2 L - L_d = L - lag
 }
 
 std::optional<double> CaptureClock::image_shift_retime_s() const {
@@ -422,11 +417,37 @@ std::optional<double> CaptureClock::depth_lag_s() const {
   return d.latency_s - c.latency_s;
 }
 
+double CaptureClock::depth_lag_sigma_s() const {
+  // The two fits' errors are mostly the same (the gyro's noise, its samples' miss of the motion
+  // between them) and cancel in the lag: its standard error is what the pairs' own differences
+  // scatter by. Until enough of them are in, the two standard errors together, an upper bound.
+  if (lag_.known()) return lag_.sigma_s();
+  const double c = estimator_.estimate().sigma_s, d = depth_estimator_.estimate().sigma_s;
+  return std::hypot(c, d);
+}
+
 std::optional<double> CaptureClock::depth_latency_sigma_s() const {
   const auto lag = depth_lag_s();
   if (!lag) return std::nullopt;
-  const double c = estimator_.estimate().sigma_s, d = depth_estimator_.estimate().sigma_s;
-  return std::sqrt(*lag * *lag + c * c + d * d);
+  return std::hypot(*lag, depth_lag_sigma_s());
+}
+
+void CaptureClock::learn_lag(const PairResult& r, std::int64_t stamp_prev_ns, std::int64_t stamp_curr_ns) {
+  const LatencyEstimate& c = estimator_.estimate();
+  if (r.status != Status::Ok || !r.depth_rotation.allFinite() || !c.known || c.sigma_s > config_.converged_sigma_s)
+    return;
+  // The slope by central difference over the offsets' grid step, 1 ms (the integral is
+  // quadratic in time between samples 5-20 ms apart).
+  constexpr std::int64_t h = 1'000'000;
+  const std::int64_t d = seconds_to_ns(c.latency_s);
+  const auto colour = estimator_.integral_over(stamp_prev_ns - d, stamp_curr_ns - d);
+  const auto depth = estimator_.integral_over(r.t_depth_prev_ns - d, r.t_depth_curr_ns - d);
+  const auto later = estimator_.integral_over(r.t_depth_prev_ns - d - h, r.t_depth_curr_ns - d - h);
+  const auto earlier = estimator_.integral_over(r.t_depth_prev_ns - d + h, r.t_depth_curr_ns - d + h);
+  if (!colour || !depth || !later || !earlier) return;
+  const Eigen::Vector3d colour_residual = R_body_camera_ * rotation_vector(r.T_prev_curr.linear()) - *colour;
+  const Eigen::Vector3d depth_residual = R_body_camera_ * r.depth_rotation - *depth;
+  lag_.add(depth_residual - colour_residual, (*later - *earlier) / (2 * h * 1e-9));
 }
 
 void CaptureClock::stamp(PairResult& r) {
@@ -442,6 +463,7 @@ void CaptureClock::stamp(PairResult& r) {
   if (r.status == Status::Ok) {
     estimator_.add_pair(stamp_prev, stamp_curr, rotation_vector(r.T_prev_curr.linear()));
     if (r.depth_rotation.allFinite()) depth_estimator_.add_pair(r.t_depth_prev_ns, r.t_depth_curr_ns, r.depth_rotation);
+    learn_lag(r, stamp_prev, stamp_curr);
   }
   const LatencyEstimate& e = estimator_.estimate();
   // The applied latency follows the estimate once it is known well enough and stands clear

@@ -34,6 +34,8 @@
 #include "rgbd_odometry/pipeline/pipeline_config.hpp"
 #include "rgbd_odometry/core/gyro.hpp"
 #include "rgbd_odometry/core/pair_result.hpp"
+#include "rgbd_odometry/core/recent_median.hpp"
+#include "rgbd_odometry/pipeline/depth_lag_fit.hpp"
 
 namespace rgbdo {
 
@@ -75,6 +77,9 @@ class CaptureLatencyEstimator {
   const LatencyEstimate& estimate() const { return estimate_; }
   // Fitted now, from the pairs held (buffers sized once).
   MountEstimate mount();
+  // The gyro's rotation over [from, to] (body frame, bias included); nullopt where the samples
+  // held do not cover it without a gap.
+  std::optional<Eigen::Vector3d> integral_over(std::int64_t from_ns, std::int64_t to_ns) const;
 
  private:
   struct Pair {
@@ -93,8 +98,6 @@ class CaptureLatencyEstimator {
   };
   // The gyro's running integral at t; nullopt outside the samples held or inside a gap.
   std::optional<Integral> integral_at(std::int64_t t_ns) const;
-  // Over [from, to]; nullopt where that is not covered without a gap.
-  std::optional<Eigen::Vector3d> integral_over(std::int64_t from_ns, std::int64_t to_ns) const;
   const Gyro& gyro(std::size_t i) const { return gyro_[(gyro_first_ + i) % gyro_.size()]; }
   void process(const Pair& p);
   void solve();
@@ -109,8 +112,7 @@ class CaptureLatencyEstimator {
   double weight_sum_ = 0;  // pairs, faded as the sums are
   // The squared residuals of the last pairs judged against the estimate, let in or not.
   static constexpr std::size_t kJudgedPairs = 31;
-  std::array<double, kJudgedPairs> judged_r2_{};
-  std::size_t judged_next_ = 0, judged_count_ = 0;
+  RecentMedian<kJudgedPairs> judged_r2_;
   // Whether a pair's residual r at the estimate (grid index k of its residuals over the offsets)
   // lies beyond what the estimate predicts: a failed fit's.
   bool outside_gate(const Eigen::Vector3d& r, const std::vector<Eigen::Vector3d>& residual, int k) const;
@@ -150,12 +152,14 @@ class CaptureClock {
   // latency is not measured.
   std::optional<double> colour_latency_sigma_s() const;
   // Instead of covariance.depth_latency_sigma_s: the depth's lag behind the colour, which is not
-  // corrected, measured as the depth alignment's rotations' latency less the colour's (rms with
-  // both standard errors); nullopt while either is not measured.
+  // corrected (rms with its standard error); nullopt while it is not measured.
   std::optional<double> depth_latency_sigma_s() const;
   // The depth alignment's rotations' latency less the pairs': the depth's lag behind the colour
   // beyond their stamps; nullopt while either is not measured.
   std::optional<double> depth_lag_s() const;
+  // Its standard error: of the pairs' differences against the gyro (depth_lag_fit.hpp), which
+  // the errors the two latency fits share do not enter.
+  double depth_lag_sigma_s() const;
   // The colour image's own latency behind its stamps, told apart from the depth's lag that leaks
   // into the tilt rotations the gyro times. A tilt from the features is half the image shift
   // (the colour's, at its latency L_c) less half the slide (the depth's, at L_d): its latency,
@@ -165,7 +169,7 @@ class CaptureClock {
   // L_c is less certain than latency.converged_sigma_s.
   // (src/pipeline/MEASUREMENTS.md#the-image-shift-moved-to-the-capture-instants)
   std::optional<double> colour_image_latency_s() const;
-  double colour_image_latency_sigma_s() const;  // of 2 L - L_d
+  double colour_image_latency_sigma_s() const;  // of 2 L - L_d = L - lag
   // How far the image shift is moved to the pairs' times: the latency applied less L_c, shrunk
   // towards 0 by L_c's standard error; nullopt where L_c is not known or
   // latency.retime_image_shift is off.
@@ -185,6 +189,11 @@ class CaptureClock {
   GyroFeed* feed_;
   CaptureLatencyEstimator estimator_;        // the pairs' rotations: the colour's latency
   CaptureLatencyEstimator depth_estimator_;  // the depth alignment's rotations: the depth's
+  DepthLagFit lag_;                          // the two rotations' difference: the depth's lag
+  Eigen::Matrix3d R_body_camera_;
+  // The pair's depth rotation less its colour rotation, each less the gyro's over its own
+  // interval at the colour's latency, into lag_ (nothing where the gyro does not cover both).
+  void learn_lag(const PairResult& r, std::int64_t stamp_prev_ns, std::int64_t stamp_curr_ns);
   std::vector<GyroSample> taken_;  // one take()'s buffer, sized once
   double applied_s_ = 0;
   CaptureTiming timing_;  // as of the last pair, its mount refreshed every kMountEveryPairs
