@@ -2,6 +2,7 @@
 self-tests): one home for their formats, shared by the bench scripts."""
 import csv
 import math
+import os
 import re
 import sys
 
@@ -84,6 +85,23 @@ def log_row(t_prev, t_curr, xi, covariance):
     q = list(axis * math.sin(angle / 2)) + [math.cos(angle / 2)]  # qx, qy, qz, qw
     return (f"{t_prev:.6f},{t_curr:.6f},ok,100," + ",".join(f"{x:.12g}" for x in list(xi[:3]) + q) + "," +
             ",".join(f"{x:.12g}" for x in np.ravel(covariance)))
+
+
+def write_synthetic_run(directory, t, xis, covariances, errors, reported_nees=None):
+    """A synthetic run's --log and --evaluation files in directory, for the scripts' self-tests:
+    pair k spans t[k] .. t[k + 1] with motion xis[k], covariance covariances[k] and error
+    errors[k]; the evaluation states the usual allowance (0.3 mm, 1.5 mrad) and, given
+    reported_nees, a nees column (window_nees left empty). Returns the two paths."""
+    log_path, evaluation_path = os.path.join(directory, "log.csv"), os.path.join(directory, "evaluation.csv")
+    with open(log_path, "w") as log, open(evaluation_path, "w") as ev:
+        log.write(LOG_HEADER + "\n")
+        ev.write("# synthetic\n# ground-truth allowance: 0.0003 m, 0.0015 rad (given)\n")
+        ev.write("t_s," + ",".join("e_" + x for x in AXES) + (",nees,window_nees" if reported_nees is not None else "") + "\n")
+        for k in range(len(errors)):
+            log.write(log_row(t[k], t[k + 1], xis[k], covariances[k]) + "\n")
+            nees = f",{reported_nees[k]:.12g}," if reported_nees is not None else ""
+            ev.write(f"{t[k + 1]:.6f}," + ",".join(f"{x:.12g}" for x in errors[k]) + nees + "\n")
+    return log_path, evaluation_path
 
 
 def read_pairs(log_path, evaluation_path):

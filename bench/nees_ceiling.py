@@ -20,13 +20,12 @@ Per pair, and over 1-s windows of consecutive pairs (their errors summed: first 
 rotations per window). The allowance is the one the evaluation file states, or --allowance.
 """
 import math
-import os
 import sys
 import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, LOG_HEADER, allowance_variances, log_evaluation_and_option, log_row, read_evaluation, read_pairs, summed_over, windows
+from evaluation_csv import allowance_variances, log_evaluation_and_option, read_evaluation, read_pairs, summed_over, windows, write_synthetic_run
 
 
 def ceilings(errors, allowance):
@@ -89,14 +88,7 @@ def self_test():
     t = 1000 + np.arange(n + 1) / 30
     reported = np.einsum("ij,ij->i", errors, np.linalg.solve(s + a, errors.T).T)  # a consistent P = S
     with tempfile.TemporaryDirectory() as tmp:
-        log_path, evaluation_path = os.path.join(tmp, "log.csv"), os.path.join(tmp, "evaluation.csv")
-        with open(log_path, "w") as log, open(evaluation_path, "w") as ev:
-            log.write(LOG_HEADER + "\n")
-            ev.write("# synthetic\n# ground-truth allowance: 0.0003 m, 0.0015 rad (given)\n")
-            ev.write("t_s," + ",".join("e_" + x for x in AXES) + ",nees,window_nees\n")
-            for k in range(n):
-                log.write(log_row(t[k], t[k + 1], np.zeros(6), s) + "\n")
-                ev.write(f"{t[k + 1]:.6f}," + ",".join(f"{x:.12g}" for x in errors[k]) + f",{reported[k]:.12g},\n")
+        log_path, evaluation_path = write_synthetic_run(tmp, t, np.zeros((n, 6)), [s] * n, errors, reported)
         rows, used = analyse(log_path, evaluation_path)
         spans = windows(t[:-1], t[1:], 1.0)
     if used != allowance:
