@@ -47,8 +47,6 @@ constexpr std::array<GateQuantile, 12> kGate999{{{3, 423.3},
                                                  {100, 17.6},
                                                  {200, 16.9},
                                                  {1e12, 16.27}}};
-// chi-square(3)'s median: a pair's squared residual over it estimates the scatter (per axis).
-constexpr double kChi2_3_Median = 2.366;
 // The fewest judged pairs whose median bounds the scatter.
 constexpr std::size_t kLeastJudged = 7;
 // A pair turned the camera when its rotation is this many sigma from none.

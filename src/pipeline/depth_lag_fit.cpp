@@ -11,8 +11,6 @@ namespace {
 constexpr std::uint64_t kLeastPairs = 10;
 // chi-square(3)'s 99.9 % point: a pair's whitened residual beyond it is a failed fit's.
 constexpr double kGate = 16.27;
-// chi-square(3)'s median: a pair's squared residual over it estimates the scatter (per component).
-constexpr double kChi2_3_Median = 2.366;
 
 }  // namespace
 

@@ -8,6 +8,10 @@
 
 namespace rgbdo {
 
+// chi-square(3)'s median: the median of 3-component squared residuals over it estimates their
+// variance per component, the bound the gates take from a RecentMedian of them.
+inline constexpr double kChi2_3_Median = 2.366;
+
 template <std::size_t N>
 class RecentMedian {
  public:

@@ -24,7 +24,6 @@
 // the gyro's (with the bias as offset) is an absolute-orientation fit (core/umeyama.hpp) at the
 // estimated latency, over the last pairs that turned the camera.
 #include <Eigen/Core>
-#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
