@@ -152,3 +152,23 @@ def log_evaluation_and_option(args, flag, usage):
     if len(args) != 2:
         sys.exit(usage)
     return args[0], args[1], option
+
+
+def self_test_verdict(failures):
+    """A self-test's end: its failures printed and exit 1, or the line its ctest looks for."""
+    if failures:
+        print("\n".join(failures))
+        sys.exit(1)
+    print("self-test passed")
+
+
+def main_over_runs(args, files_per_run, self_test, report, usage):
+    """A bench script's command line: --self-test, or runs of files_per_run paths each, pooled
+    into report([(path, ...), ...]); anything else exits with the usage."""
+    if args == ["--self-test"]:
+        self_test()
+        return
+    if len(args) < files_per_run or len(args) % files_per_run:
+        sys.exit(usage)
+    report([tuple(args[i:i + files_per_run]) for i in range(0, len(args), files_per_run)])
+

@@ -19,7 +19,8 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import AXES, allowance_variances, read_evaluation, read_log, stamp_key, write_synthetic_run
+from evaluation_csv import (AXES, allowance_variances, main_over_runs, read_evaluation, read_log, self_test_verdict,
+                            stamp_key, write_synthetic_run)
 
 USAGE = "usage: tight_directions.py LOG.csv EVALUATION.csv [LOG.csv EVALUATION.csv ...] | --self-test"
 
@@ -114,19 +115,11 @@ def self_test():
             for _, _, other, _ in quartiles[:3]:
                 if not other < 0.35 * extra:
                     failures.append(f"a slower quarter's excess {other:.2e}, nothing added there")
-    if failures:
-        print("\n".join(failures))
-        sys.exit(1)
-    print("self-test passed")
+    self_test_verdict(failures)
 
 
 def main(args):
-    if args == ["--self-test"]:
-        self_test()
-        return
-    if len(args) < 2 or len(args) % 2:
-        sys.exit(USAGE)
-    report(list(zip(args[0::2], args[1::2])))
+    main_over_runs(args, 2, self_test, report, USAGE)
 
 
 if __name__ == "__main__":
