@@ -21,11 +21,10 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import (AXES, allowance_variances, main_over_runs, read_evaluation, read_log, self_test_verdict,
-                            stamp_key, write_synthetic_run)
+from evaluation_csv import (AXES, CHI2_6_95, allowance_variances, main_over_runs, read_evaluation, read_log,
+                            self_test_verdict, stamp_key, write_synthetic_run)
 
 USAGE = "usage: own_versus_level.py OWN.csv REPORTED.csv EVALUATION.csv [...] | --self-test"
-CHI2_6_95 = 12.5916
 BIN_QUANTILES = [0, 0.25, 0.5, 0.75, 0.9, 1]
 
 

@@ -19,8 +19,8 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import (AXES, allowance_variances, main_over_runs, read_evaluation, read_log, self_test_verdict,
-                            stamp_key, write_synthetic_run)
+from evaluation_csv import (AXES, CHI2_6_95, allowance_variances, main_over_runs, read_evaluation, read_log,
+                            self_test_verdict, stamp_key, write_synthetic_run)
 
 USAGE = "usage: tight_directions.py LOG.csv EVALUATION.csv [LOG.csv EVALUATION.csv ...] | --self-test"
 
@@ -55,15 +55,17 @@ def excess(e2, lam):
     return float(np.sqrt(max(0.0, np.mean(e2) - np.mean(lam))))
 
 
+def rate_quartiles(rates):
+    """(rate from, rate to, which pairs) per quartile of the rotation rate."""
+    edges = np.quantile(rates, [0, 0.25, 0.5, 0.75, 1])
+    for i in range(4):
+        yield edges[i], edges[i + 1], (rates >= edges[i]) & ((rates < edges[i + 1]) if i < 3 else (rates <= edges[i + 1]))
+
+
 def by_rate(tight_e2, tight_lambda, rates):
     """(rate from, rate to, excess, mean e^2 / mean lambda) per quartile of the rotation rate."""
-    edges = np.quantile(rates, [0, 0.25, 0.5, 0.75, 1])
-    out = []
-    for i in range(4):
-        m = (rates >= edges[i]) & ((rates < edges[i + 1]) if i < 3 else (rates <= edges[i + 1]))
-        out.append((edges[i], edges[i + 1], excess(tight_e2[m], tight_lambda[m]),
-                    float(np.mean(tight_e2[m]) / np.mean(tight_lambda[m]))))
-    return out
+    return [(lo, hi, excess(tight_e2[m], tight_lambda[m]), float(np.mean(tight_e2[m]) / np.mean(tight_lambda[m])))
+            for lo, hi, m in rate_quartiles(rates)]
 
 
 def report(runs):
@@ -73,8 +75,10 @@ def report(runs):
     print("  median " + "  ".join(f"{x:5.2f}" for x in np.median(ratios, axis=0)))
     print(f"the two smallest: excess {1e3 * excess(tight_e2, tight_lambda):.2f} (mm or mrad), "
           f"mean e^2 / mean lambda {np.mean(tight_e2) / np.mean(tight_lambda):.2f}")
-    for lo, hi, ex, ratio in by_rate(tight_e2, tight_lambda, rates):
-        print(f"  rotation {lo:.3f}-{hi:.3f} rad/s: excess {1e3 * ex:.2f}, ratio {ratio:.2f}")
+    nees = ratios.sum(axis=1)
+    for (lo, hi, ex, ratio), (_, _, m) in zip(by_rate(tight_e2, tight_lambda, rates), rate_quartiles(rates)):
+        print(f"  rotation {lo:.3f}-{hi:.3f} rad/s: excess {1e3 * ex:.2f}, ratio {ratio:.2f}; "
+              f"pair NEES {nees[m].mean():.2f}, {100 * np.mean(nees[m] <= CHI2_6_95):.1f} % under the chi2(6) 95 % gate")
 
 
 def self_test():
