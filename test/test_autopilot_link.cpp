@@ -556,7 +556,7 @@ void expect_capture_error(const GyroRun& g, const char* name, double expected_ms
   std::cout << "[ live ] capture latency against " << name << " " << g.latency_ms << " +- " << g.latency_sigma_ms
             << " ms (applied " << g.applied_ms << "), the log " << g.capture_error_ms
             << " ms from the capture instants\n";
-  EXPECT_NEAR(g.capture_error_ms, expected_ms, 10);
+  EXPECT_NEAR(g.capture_error_ms, expected_ms, 12);
 }
 
 // GIVEN a PX4-like autopilot whose ATTITUDE rates are the recording's ground truth's (with a
@@ -575,8 +575,10 @@ void expect_capture_error(const GyroRun& g, const char* name, double expected_ms
 // Measured: -1.3 and -2.7 ms idle and with both cores hogged, 7.6 inside the whole suite's
 // parallel run, whose load changes during the run (the estimate averages the frames' delivery
 // delay over it, the median here is its second half's); +21.3, +21.2 and +22.3 against the late
-// stamps. The bounds part what is asserted from the stamps unchanged (+22 … +53) and from
-// the gyro's delay ignored or taken the wrong way.
+// stamps. Once -10.2 in CI's AddressSanitizer stage, its first seconds' frames delivered late
+// (latency 24.9 +- 2.6 ms against 16-18 in six reruns there, which gave -0.2 … +2.4 and +18.1 …
+// +21.1). The bounds (+-12 ms) part what is asserted from the stamps unchanged (+22 … +53) and
+// from the gyro's delay ignored or taken the wrong way (25 ms off).
 // Under ThreadSanitizer the pipeline keeps up with a few frames a second of the 30 it is
 // given: too few pairs to measure a latency to a few milliseconds. The flow is checked there.
 TEST(FlightLinkAutopilot, TheAutopilotsGyroTimesTheFramesLivePx4) {
