@@ -154,6 +154,14 @@ def log_evaluation_and_option(args, flag, usage):
     return args[0], args[1], option
 
 
+def quantile_bins(values, quantiles):
+    """(from, to, which) per bin between consecutive quantiles of values, the last bin closed."""
+    edges = np.quantile(values, quantiles)
+    for i in range(len(edges) - 1):
+        upper = (values <= edges[i + 1]) if i == len(edges) - 2 else (values < edges[i + 1])
+        yield edges[i], edges[i + 1], (values >= edges[i]) & upper
+
+
 def self_test_verdict(failures):
     """A self-test's end: its failures printed and exit 1, or the line its ctest looks for."""
     if failures:

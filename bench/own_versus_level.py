@@ -21,8 +21,8 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import (AXES, CHI2_6_95, allowance_variances, main_over_runs, read_evaluation, read_log,
-                            self_test_verdict, stamp_key, write_synthetic_run)
+from evaluation_csv import (AXES, CHI2_6_95, allowance_variances, main_over_runs, quantile_bins, read_evaluation,
+                            read_log, self_test_verdict, stamp_key, write_synthetic_run)
 
 USAGE = "usage: own_versus_level.py OWN.csv REPORTED.csv EVALUATION.csv [...] | --self-test"
 BIN_QUANTILES = [0, 0.25, 0.5, 0.75, 0.9, 1]
@@ -54,13 +54,10 @@ def pairs(runs):
 
 def by_rho(rows):
     """(rho from, to, pairs, own NEES, own share under the gate, reported NEES, its share) per bin."""
-    edges = np.quantile(rows[:, 0], BIN_QUANTILES)
     out = []
-    for i in range(len(edges) - 1):
-        last = i == len(edges) - 2
-        m = (rows[:, 0] >= edges[i]) & ((rows[:, 0] <= edges[i + 1]) if last else (rows[:, 0] < edges[i + 1]))
+    for lo, hi, m in quantile_bins(rows[:, 0], BIN_QUANTILES):
         own, reported = rows[m, 1], rows[m, 2]
-        out.append((edges[i], edges[i + 1], int(m.sum()), own.mean(), np.mean(own <= CHI2_6_95), reported.mean(),
+        out.append((lo, hi, int(m.sum()), own.mean(), np.mean(own <= CHI2_6_95), reported.mean(),
                     np.mean(reported <= CHI2_6_95)))
     return out
 
@@ -101,7 +98,8 @@ def self_test():
             failures.append(f"errors from the {truth}: NEES against it by bin {flat}, expected 6 each")
         rising = climbing[-1] / climbing[0]
         if truth == "own" and not rising > 2.0:
-            failures.append(f"errors from their own: the level's NEES rises {rising:.2f}x across the bins, expected > 2")
+            failures.append(f"errors from their own: the level's NEES rises {rising:.2f}x across the bins, "
+                            "expected > 2")
         if truth == "level" and not rising < 0.6:
             failures.append(f"errors from the level: their own's NEES falls to {rising:.2f}x, expected < 0.6")
     self_test_verdict(failures)

@@ -19,8 +19,8 @@ import tempfile
 
 import numpy as np
 
-from evaluation_csv import (AXES, CHI2_6_95, allowance_variances, main_over_runs, read_evaluation, read_log,
-                            self_test_verdict, stamp_key, write_synthetic_run)
+from evaluation_csv import (AXES, CHI2_6_95, allowance_variances, main_over_runs, quantile_bins, read_evaluation,
+                            read_log, self_test_verdict, stamp_key, write_synthetic_run)
 
 USAGE = "usage: tight_directions.py LOG.csv EVALUATION.csv [LOG.csv EVALUATION.csv ...] | --self-test"
 
@@ -55,17 +55,11 @@ def excess(e2, lam):
     return float(np.sqrt(max(0.0, np.mean(e2) - np.mean(lam))))
 
 
-def rate_quartiles(rates):
-    """(rate from, rate to, which pairs) per quartile of the rotation rate."""
-    edges = np.quantile(rates, [0, 0.25, 0.5, 0.75, 1])
-    for i in range(4):
-        yield edges[i], edges[i + 1], (rates >= edges[i]) & ((rates < edges[i + 1]) if i < 3 else (rates <= edges[i + 1]))
-
-
 def by_rate(tight_e2, tight_lambda, rates):
-    """(rate from, rate to, excess, mean e^2 / mean lambda) per quartile of the rotation rate."""
-    return [(lo, hi, excess(tight_e2[m], tight_lambda[m]), float(np.mean(tight_e2[m]) / np.mean(tight_lambda[m])))
-            for lo, hi, m in rate_quartiles(rates)]
+    """(rate from, rate to, excess, mean e^2 / mean lambda, which pairs) per quartile of the
+    rotation rate."""
+    return [(lo, hi, excess(tight_e2[m], tight_lambda[m]), float(np.mean(tight_e2[m]) / np.mean(tight_lambda[m])), m)
+            for lo, hi, m in quantile_bins(rates, [0, 0.25, 0.5, 0.75, 1])]
 
 
 def report(runs):
@@ -76,9 +70,10 @@ def report(runs):
     print(f"the two smallest: excess {1e3 * excess(tight_e2, tight_lambda):.2f} (mm or mrad), "
           f"mean e^2 / mean lambda {np.mean(tight_e2) / np.mean(tight_lambda):.2f}")
     nees = ratios.sum(axis=1)
-    for (lo, hi, ex, ratio), (_, _, m) in zip(by_rate(tight_e2, tight_lambda, rates), rate_quartiles(rates)):
+    for lo, hi, ex, ratio, m in by_rate(tight_e2, tight_lambda, rates):
         print(f"  rotation {lo:.3f}-{hi:.3f} rad/s: excess {1e3 * ex:.2f}, ratio {ratio:.2f}; "
-              f"pair NEES {nees[m].mean():.2f}, {100 * np.mean(nees[m] <= CHI2_6_95):.1f} % under the chi2(6) 95 % gate")
+              f"pair NEES {nees[m].mean():.2f}, {100 * np.mean(nees[m] <= CHI2_6_95):.1f} % "
+              "under the chi2(6) 95 % gate")
 
 
 def self_test():
@@ -108,15 +103,15 @@ def self_test():
         if added == 0:
             if not np.all(np.abs(ratios.mean(axis=0) - 1) < 0.08):
                 failures.append(f"consistent errors: e^2/lambda {ratios.mean(axis=0)}, expected 1 each")
-            if not np.all([0.85 < ratio < 1.15 for *_, ratio in quartiles]):
+            if not np.all([0.85 < ratio < 1.15 for _, _, _, ratio, _ in quartiles]):
                 failures.append(f"consistent errors: quartile ratios {[x[3] for x in quartiles]}, expected 1")
         else:
-            lo, hi, found, _ = quartiles[3]
+            lo, hi, found, _, _ = quartiles[3]
             if not abs(found - extra) < 0.15 * extra:
                 failures.append(f"fastest quarter's excess {found:.2e}, added {extra:.2e}")
             if not abs(lo - np.quantile(rates, 0.75)) < 1e-3:
                 failures.append(f"fastest quarter from {lo:.3f} rad/s, expected {np.quantile(rates, 0.75):.3f}")
-            for _, _, other, _ in quartiles[:3]:
+            for _, _, other, _, _ in quartiles[:3]:
                 if not other < 0.35 * extra:
                     failures.append(f"a slower quarter's excess {other:.2e}, nothing added there")
     self_test_verdict(failures)

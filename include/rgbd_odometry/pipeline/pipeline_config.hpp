@@ -173,9 +173,9 @@ struct CovarianceConfig {
   // ... except where a pair's own is wider in some direction: there it weighs in from
   // sqrt(this) times as wide (in variance) and goes out as its own from this; 0: never. 9 is
   // 3x in sigma, weighing in from 1.7x: a pair's own excess over the mean is error, not noise
-  // of the estimate (fr1_xyz and its thinned copies: binned by that excess, the pairs score the
-  // same NEES against their own covariance, 3.7-4.6, while against a mean passing them from 2.2x
-  // in sigma the widest fifth scored 6.9 and 83 % under the gate; src/pipeline/MEASUREMENTS.md).
+  // of the estimate (fr1_xyz with a gyro, binned by that excess: 3.7-4.6 NEES against their own
+  // covariance in every bin, while against a mean passing them from 2.2x in sigma the widest
+  // tenth scored 6.9, 83 % under the gate; its thinned copies alike; src/pipeline/MEASUREMENTS.md).
   double smoothing_pass_ratio = 9;
 };
 
