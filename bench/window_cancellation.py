@@ -37,6 +37,8 @@ def shares(runs, window_s):
         lagged.append(np.array([(centred[lag:] * centred[:-lag]).sum(axis=0) / (centred ** 2).sum(axis=0)
                                 for lag in LAGS]))
     ratios = np.vstack(ratios)
+    if len(ratios) == 0:
+        sys.exit(f"no {window_s:g}-s window of consecutive solved pairs in the runs given")
     return ratios.mean(axis=0), len(ratios), np.mean(lagged, axis=0)
 
 
