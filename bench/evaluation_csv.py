@@ -105,7 +105,8 @@ def write_synthetic_run(directory, t, xis, covariances, errors, reported_nees=No
 
 
 def read_pairs(log_path, evaluation_path):
-    """Pairs in both files with a finite error, in time order: t_prev, t_curr, xi, error."""
+    """Pairs in both files with a finite error, in time order: t_prev, t_curr, xi, covariance
+    (n x 6 x 6, as logged, no allowance), error."""
     log = read_log(log_path)
     evaluation, _ = read_evaluation(evaluation_path)
     rows = []
@@ -113,13 +114,12 @@ def read_pairs(log_path, evaluation_path):
         k = stamp_key(t)
         error = np.array([evaluation["e_" + a][n] for a in AXES])
         if k in log and np.all(np.isfinite(error)):
-            t_prev, t_curr, xi, _ = log[k]
-            rows.append((t_prev, t_curr, xi, error))
+            t_prev, t_curr, xi, covariance = log[k]
+            rows.append((t_prev, t_curr, xi, covariance, error))
     if len(rows) < 3:
         sys.exit(f"fewer than 3 pairs in both {log_path} and {evaluation_path}")
     rows.sort(key=lambda r: r[1])
-    t_prev, t_curr, xi, error = (np.array([r[i] for r in rows]) for i in range(4))
-    return t_prev, t_curr, xi, error
+    return tuple(np.array([r[i] for r in rows]) for i in range(5))
 
 
 def windows(t_prev, t_curr, window_s):

@@ -46,7 +46,7 @@ def analyse(log_path, evaluation_path, allowance=None, window_s=1.0):
     for the pairs and the windows; and the allowance used."""
     evaluation, stated = read_evaluation(evaluation_path)
     allowance = allowance or stated
-    t_prev, t_curr, _, error = read_pairs(log_path, evaluation_path)
+    t_prev, t_curr, _, _, error = read_pairs(log_path, evaluation_path)
     spans = windows(t_prev, t_curr, window_s)
     summed = summed_over(error, spans)
     rows = []

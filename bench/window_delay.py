@@ -36,7 +36,7 @@ from evaluation_csv import AXES, LOG_HEADER, log_evaluation_and_option, log_row,
 
 def analyse(log_path, evaluation_path, window_s=1.0):
     """Per axis: delay (s), R^2, rms of the windows' error and of what the delay leaves; the count."""
-    t_prev, t_curr, xi, error = read_pairs(log_path, evaluation_path)
+    t_prev, t_curr, xi, _, error = read_pairs(log_path, evaluation_path)
     rate = (xi - error) / (t_curr - t_prev)[:, None]  # the ground truth's: the files hold xi - xi_gt
     spans = windows(t_prev, t_curr, window_s)
     if len(spans) < 3:
